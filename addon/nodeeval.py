@@ -698,10 +698,14 @@ def nan_inputs(ntree, types=None, keep=None, colors=False):
         if (types is not None and node.type not in types) or (keep is not None and not keep(node)):
             continue
         for sock in node.inputs:
+            if not sock.enabled:
+                continue        # (a Mix's inputs of its other data types: read by nothing)
             v = getattr(sock, 'default_value', None)
             if isinstance(v, float):
                 bad = v != v
-            elif colors and getattr(sock, 'type', None) in ('RGBA', 'VECTOR'):
+            elif colors and getattr(sock, 'type', None) in ('RGBA', 'VECTOR') and not sock.hide_value:
+                # (a hidden value stands for what Cycles reads when unlinked: a texture's
+                # coordinates, a shader's normal; a script's NaN there is read by nothing)
                 bad = any(x != x for x in v[:3])
             else:
                 continue

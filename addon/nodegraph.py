@@ -398,6 +398,7 @@ class Used(set):
         self.same = Identical()
         self._sources = []          # (node, output identifier) of each used output
         self._identical = {}        # bl_idname -> the Identical keys of its used outputs
+        self.folded = set()         # output_key(node, None) of the nodes folded into a constant read
 
     def add_output(self, node, identifier):
         self.add(output_key(node, identifier))
@@ -431,6 +432,16 @@ def used_outputs(ntree):
         return _used_outputs(ntree)
 
 
+def compiled(ntree, used):
+    """Whether Cycles reads the values of a top-level node of ntree (used: its used_outputs):
+    the active output, a node one of whose outputs reaches it, or one constant folding turned
+    into a constant that does (a Math or Mix of constants). A value in any other node (left
+    unlinked, on an EEVEE-only output, cut off by a fold) is read by nothing."""
+    active = output_node(ntree)
+    return lambda n: n == active or output_key(n, None) in used.folded or \
+        any(used.reads(n, o.identifier) for o in n.outputs)
+
+
 def _used_outputs(ntree):
     out = output_node(ntree)
     folder = Folder()
@@ -441,6 +452,7 @@ def _used_outputs(ntree):
         for sock in folder.live_inputs(node):
             link = folder.input_state(sock)
             if not isinstance(link, GraphLink):
+                _folded_into(sock, folder, used.folded)
                 continue
             used.add_output(link.from_node, link.from_socket.identifier)
             key = output_key(link.from_node, None)
@@ -448,6 +460,24 @@ def _used_outputs(ntree):
                 seen.add(key)
                 todo.append(link.from_node)
     return used
+
+
+def _folded_into(sock, folder, found, depth=0):
+    """Adds to found the output_key(node, None) of the nodes whose values constant folding
+    computed into the constant sock reads (a linked input Folder gives a _Const): the node
+    linked, and through its inputs that fold too, theirs (a chain of Math nodes of constants)."""
+    link, _ = source(sock)
+    if link is None or depth > FOLD_DEPTH:
+        return
+    node = link.from_node
+    key = output_key(node, None)
+    if key in found:
+        return
+    found.add(key)
+    for i in range(len(node.inputs)):
+        s = node.inputs[i]
+        if not isinstance(folder.input_state(s), GraphLink):
+            _folded_into(s, folder, found, depth + 1)
 
 
 # node settings Cycles does not read (a texture's Color Mapping), left out of Identical's keys

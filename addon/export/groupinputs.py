@@ -73,14 +73,35 @@ def grouped_inputs(ntree, used):
 
 
 def nan_inputs_by_kind(ntree):
-    """(computed, read as 0): the 'input' of 'node' labels of ntree's NaN float inputs, its
-    groups' included (grouped_inputs), split by whether the node reading them is one the node
-    evaluation computes (nodeeval.node_inputs: a Math node's NaN is computed through it, as
-    Cycles does, not read as 0) or one whose own value is read (a NaN read as 0). For trees
-    without the material's finer families (a world's)."""
+    """(computed, floats read as 0, colours read): the 'input' of 'node' labels of ntree's NaN
+    inputs (float, colour and vector: a NaN channel), its groups' included (grouped_inputs), of
+    the nodes Cycles reads (nodegraph.compiled), split by whether the node reading them is one
+    the node evaluation computes (nodeeval.node_inputs: a Math node's NaN is computed through
+    it, as Cycles does, not read as 0) or one whose own value is read: a float read as 0, a
+    colour or vector with its NaN channel. For trees without the material's finer families (a
+    world's, a light's)."""
     from .. import nodeeval
-    from ..nodegraph import used_outputs
+    from ..nodegraph import compiled, used_outputs
+    used = used_outputs(ntree)
+    rendered = compiled(ntree, used)
     computes = lambda n: nodeeval.node_inputs(n) is not None     # noqa: E731
-    nans = [g for g in grouped_inputs(ntree, used_outputs(ntree)) if g.is_float and np.isnan(g.value).any()]
-    return (nodeeval.nan_inputs(ntree, keep=computes) + [g.label for g in nans if computes(g.node)],
-            nodeeval.nan_inputs(ntree, keep=lambda n: not computes(n)) + [g.label for g in nans if not computes(g.node)])
+    # (a NaN colour too: a world's Background Color of (NaN, 0.5, 0.5), or one into a Mix,
+    # had been rendered without naming the socket; and only nodes Cycles reads: a NaN in a
+    # node left unlinked had been said)
+    nans = [g for g in grouped_inputs(ntree, used) if np.isnan(g.value).any()]
+
+    def found(c, colors):
+        return nodeeval.nan_inputs(ntree, keep=lambda n: rendered(n) and computes(n) == c, colors=colors) + \
+            [g.label for g in nans if computes(g.node) == c and (colors or g.is_float)]
+    floats = found(False, False)
+    return found(True, True), floats, [b for b in found(False, True) if b not in floats]
+
+
+def nan_said(ntree, colours="NaN read as 0 for {}"):
+    """The texts naming ntree's NaN inputs by what they become (nan_inputs_by_kind), for a
+    world's or a light's message: 'NaN read as 0 for ...', 'NaN computed through ...'; colours:
+    the text for a colour's NaN channel read at the node's own value."""
+    computed, floats, colour = nan_inputs_by_kind(ntree)
+    return [said.format(', '.join(bad)) for bad, said in
+            ((floats, "NaN read as 0 for {}"), (colour, colours),
+             (computed, "NaN computed through the node as Cycles computes it for {}")) if bad]

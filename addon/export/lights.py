@@ -8,10 +8,11 @@ import numpy as np
 from .. import principled, scenedata as sd
 from ..lights.area import sheared
 from .. import nodeeval, nodegraph
-from ..nodeeval import constant_value, nan_inputs
+from ..nodeeval import constant_value
 from ..nodegraph import input_socket, linked_link, output_node
 from .lampcoordinates import (PROCEDURAL_TEXTURES, at_lamp_coordinates, coordinate_value, lamp_coordinates,
                               texture_profile)
+from .groupinputs import nan_said
 from .objectinfo import OBJECT_INFO_OUTPUTS, object_value
 from .shadersockets import mix_factor, value_emission
 
@@ -292,9 +293,11 @@ def _light_shader_factor(light, name, messages, approximated, lamp, profile=None
         return np.zeros(3), (f"its Light Output targets {' and '.join(targets)}, not Cycles" if targets
                              else "no Light Output in its node tree")
     reasons, dark = [], []
-    bad = nan_inputs(light.node_tree)
-    if bad:     # (read as 0: a NaN Emission Strength gives no light, as in Cycles)
-        reasons.append(f"NaN read as 0 for {', '.join(bad)}")
+    # (read as 0: a NaN Emission Strength gives no light, as in Cycles; a colour's NaN channel
+    # too, and one into a node is computed through it; a group's named where typed)
+    # (a colour's NaN channel is not read as 0 here: the light's emission is not finite and the
+    # lamp is skipped, as Cycles emits nothing from it: (NaN, 0.5, 0.5) black, not cyan)
+    reasons += nan_said(light.node_tree, "NaN in a colour channel of {}: the light emits nothing, as in Cycles")
     surface = out.inputs['Surface']
     if not surface.is_linked:
         dark.append("nothing linked into its Light Output's Surface")

@@ -22,8 +22,8 @@ import numpy as np
 from .. import emissionsampling, nodeeval, specular
 from .. import scenedata as sd
 from ..nodeeval import nan_inputs
-from ..nodegraph import (closure_link, cycle_said, dead_group_outputs, link_cycle, linked_link, linked_node,
-                         output_node, source, used_outputs)
+from ..nodegraph import (closure_link, compiled, cycle_said, dead_group_outputs, link_cycle, linked_link,
+                         linked_node, output_node, source, used_outputs)
 from ..procedural import ProceduralTexels
 from .aovs import shader_aovs
 from .attributemaps import AttributeMaps, affine_fit, marked_label, probe_albedo
@@ -455,10 +455,8 @@ class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBak
             shader = {n.type for n in ntree.nodes} - computed - PROCEDURAL_TYPES
             # only nodes Cycles compiles (the active output and what reaches it after constant
             # folding): a NaN in a node left unlinked, or on an EEVEE-only output, is read by nothing
-            active, used = output_node(ntree), self._used_outputs
-
-            def rendered(n):
-                return n == active or any(used.reads(n, o.identifier) for o in n.outputs)
+            used = self._used_outputs
+            rendered = compiled(ntree, used)
 
             # (inside groups too: a NaN typed in a group, or into a Group node's input read
             # inside, is named where it is typed and sorted by the node reading it)
@@ -479,13 +477,14 @@ class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBak
             # Diffuse's, Principled's or Glossy's Color, as DACRT does, where it had gone unnamed)
             in_shaders = [g.label for g in grouped if np.isnan(g.value).any()
                           and nodeeval.node_inputs(g.node) is None and g.node.type not in PROCEDURAL_TYPES]
-            in_computed = [g.label for g in nans if nodeeval.node_inputs(g.node) is not None]
+            # (and one into a node computed, as its float inputs are: a Mix's NaN A had gone unnamed)
+            in_computed = [g.label for g in grouped if np.isnan(g.value).any() and nodeeval.node_inputs(g.node) is not None]
             for bad, said in (([b for b in nan_inputs(ntree, shader, rendered, colors=True) + in_shaders
                                 if b not in apart and b not in through],
                                "NaN read as 0 (as Cycles clamps it) for {}"),
                               *((bad, f"NaN read as 0 for {{}}, where Cycles renders it {what}, not as 0")
                                 for bad, what in unlike),
-                              (nan_inputs(ntree, computed, rendered) + in_computed + through +
+                              (nan_inputs(ntree, computed, rendered, colors=True) + in_computed + through +
                                [b for b in textures if b not in differs],
                                "NaN computed through the node as Cycles computes it for {}"),
                               (differs, "NaN for {}: the texture computes with it, not as Cycles' does")):

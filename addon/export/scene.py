@@ -18,7 +18,7 @@ from . import budget
 from .assembly import Assembly
 from .camera import export_camera
 from .errors import ExportCancelled, ExportError
-from .groupinputs import nan_inputs_by_kind
+from .groupinputs import nan_said
 from .images import ImageReading, texture_limit
 from .instanceattrs import InstanceAttributes
 from .lights import export_light, light_link_receivers
@@ -314,11 +314,7 @@ class Exporter:
             # (constant_value reads a shader's NaN as 0: a NaN Strength is a black world; a Math
             # node's is computed through it, as Cycles: Maximum(NaN, 0.3) black in both, which
             # had been said read as 0; groups' values too, which had gone unsaid)
-            computed, bad = nan_inputs_by_kind(self.world.node_tree)
-            for found, said in ((bad, "NaN read as 0 for {}"),
-                                (computed, "NaN computed through the node as Cycles computes it for {}")):
-                if found:
-                    world_reason = '; '.join(r for r in (world_reason, said.format(', '.join(found))) if r)
+            world_reason = '; '.join(r for r in (world_reason, *nan_said(self.world.node_tree)) if r)
         if bounce_world is not None:
             world, environment, apart = sampled_as_one(world, environment, (camera_world, bounce_world))
             if apart:

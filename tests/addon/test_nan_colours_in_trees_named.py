@@ -1,0 +1,107 @@
+"""A NaN channel typed into a colour (a script's or driver's) is named in the world's and a
+light's node trees and where a node computes with it, as it is in a material's shader inputs:
+the scans of those trees, and of the nodes computed, had read float inputs alone, and a Math or
+Mix of constants (which Cycles folds into the constant it reads) counted as no node read.
+
+Cycles 5.0.1, 16 spp (measured): a Diffuse fed a Mix Color of (NaN, 0.5, 0.5) and (0.2, 0.5,
+0.5) under a white world (0.0007, 0.52, 0.54), DACRT (0, 0.5, 0.5); a world Background Color of
+(NaN, 0.5, 0.5), directly or through such a Mix, (0.0006, 0.52, 0.52), DACRT (0, 0.5, 0.5); a
+point light whose Emission Color is (NaN, 0.5, 0.5), directly or through the Mix, emits nothing
+((0.004, 0.003, 0.002) against (0.003, 0.20, 0.18) for (0, 0.5, 0.5)): DACRT skips it, so 'read
+as 0' would be false there and the message says the light emits nothing."""
+import numpy as np
+import pytest
+
+from . import scenes
+
+NAN = float('nan')
+
+
+def _mix(tree, name):
+    """A Mix Color node of constants, (NaN, 0.5, 0.5) into (0.2, 0.5, 0.5); its colour output."""
+    mix = tree.nodes.new('ShaderNodeMix')
+    mix.data_type, mix.name = 'RGBA', name
+    a, b = (s for s in mix.inputs if s.enabled and s.type == 'RGBA')
+    a.default_value, b.default_value = (NAN, 0.5, 0.5, 1.0), (0.2, 0.5, 0.5, 1.0)
+    return next(s for s in mix.outputs if s.enabled)
+
+
+def _world(scene, mixed):
+    scenes.small_view(scene)
+    wt = scene.world.node_tree
+    bg = next(n for n in wt.nodes if n.type == 'BACKGROUND')
+    if mixed:
+        wt.links.new(_mix(wt, 'WMX'), bg.inputs['Color'])
+    else:
+        bg.inputs['Color'].default_value = (NAN, 0.5, 0.5, 1.0)
+    return wt
+
+
+def _light(scene, mixed):
+    mat, _, _, _ = scenes.small_view(scene, background=None)
+    scenes.plane("Plane", size=10, materials=(mat,))
+    lamp = scenes.light('POINT', 100, location=(0, 0, 2))
+    lamp.data.use_nodes = True
+    lt = lamp.data.node_tree
+    em = next(n for n in lt.nodes if n.type == 'EMISSION')
+    if mixed:
+        lt.links.new(_mix(lt, 'LMX'), em.inputs['Color'])
+    else:
+        em.inputs['Color'].default_value = (NAN, 0.5, 0.5, 1.0)
+
+
+def test_a_nan_colour_into_a_material_node_computed_is_named(scene, said):
+    mat, nt, diffuse, _ = scenes.small_view(scene)
+    nt.links.new(_mix(nt, 'MX'), diffuse.inputs['Color'])
+    scenes.plane("Plane", size=10, materials=(mat,))
+    img = scenes.render_rgba(scene)
+    text = " | ".join(said)
+    assert "NaN computed through the node as Cycles computes it for 'A' of 'MX'" in text, text
+    assert np.allclose(img[..., :3].mean(axis=(0, 1)), (0.0, 0.5, 0.5), atol=0.02)
+
+
+@pytest.mark.parametrize("mixed, words", [
+    (False, "NaN read as 0 for 'Color' of 'Background'"),
+    (True, "NaN computed through the node as Cycles computes it for 'A' of 'WMX'"),
+], ids=['background', 'mix'])
+def test_a_nan_colour_in_the_world_is_named(scene, said, mixed, words):
+    _world(scene, mixed)
+    img = scenes.render_rgba(scene)
+    text = " | ".join(said)
+    assert words in text, text
+    assert np.allclose(img[..., :3].mean(axis=(0, 1)), (0.0, 0.5, 0.5), atol=1e-6)
+
+
+@pytest.mark.parametrize("mixed, words", [
+    (False, "NaN in a colour channel of 'Color' of 'Emission': the light emits nothing, as in Cycles"),
+    (True, "NaN computed through the node as Cycles computes it for 'A' of 'LMX'"),
+], ids=['emission', 'mix'])
+def test_a_nan_colour_in_a_light_is_named(scene, said, mixed, words):
+    _light(scene, mixed)
+    img = scenes.render_rgba(scene)
+    text = " | ".join(said)
+    assert words in text, text
+    assert "NaN read as 0" not in text, text          # (its other channels are not kept: black)
+    assert img[..., :3].max() == 0.0
+
+
+def test_a_nan_in_a_world_node_nothing_reads_is_not_said(scene, said):
+    # (control, and a false message before: a Math left unlinked had been named)
+    wt = _world(scene, False)
+    next(n for n in wt.nodes if n.type == 'BACKGROUND').inputs['Color'].default_value = (0.5, 0.5, 0.5, 1.0)
+    math = wt.nodes.new('ShaderNodeMath')
+    math.inputs[0].default_value = NAN
+    scenes.render_rgba(scene)
+    assert "NaN" not in " | ".join(said)
+
+
+def test_a_nan_in_a_mix_input_of_another_data_type_is_not_said(scene, said):
+    # (control, and a false message before: a Mix Color's float A, disabled, is read by nothing)
+    wt = _world(scene, True)
+    mix = wt.nodes['WMX']
+    for s in mix.inputs:
+        if s.enabled and s.type == 'RGBA':
+            s.default_value = (0.5, 0.5, 0.5, 1.0)
+    next(s for s in mix.inputs if not s.enabled and s.type == 'VALUE' and s.name == 'A').default_value = NAN
+    scenes.render_rgba(scene)
+    assert "NaN" not in " | ".join(said)
