@@ -82,7 +82,9 @@ class DACRTSceneSettings(bpy.types.PropertyGroup):
         name="Exposure",
         description="Image brightness scale, as Cycles' Film > Exposure: multiplies the Combined "
                     "colour and the light passes (not alpha or data passes)",
-        default=1.0, min=0.0, soft_max=10.0)
+        # (Cycles' range: with none, an 'inf' typed stored float32's largest and every pixel
+        # rendered inf, unsaid)
+        default=1.0, min=0.0, max=4294967296.0, soft_max=10.0)
     filter_type: EnumProperty(
         name="Filter Type", description="Pixel filter", items=FILTER_ITEMS,
         default='BLACKMAN_HARRIS')

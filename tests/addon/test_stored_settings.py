@@ -49,3 +49,21 @@ def test_a_clamped_float_is_said_as_people_read_it(scene, said):
     text = " ".join(said)
     assert "scene.dacrt.filter_width is 0, outside its range 0.01 .. " in text and "rendered with 0.01" in text, text
     assert "0.00999" not in text, text
+
+
+def test_an_exposure_typed_inf_takes_cycles_largest_and_renders_finite(scene, said):
+    # Cycles' Film > Exposure stops at 2^32; DACRT's had no maximum, so an 'inf' typed or set
+    # by a script stored float32's largest and every pixel rendered inf, unsaid
+    _scene(scene)
+    scene.dacrt.samples = 1
+    scene.dacrt.film_exposure = float('inf')
+    assert scene.dacrt.film_exposure == 2.0 ** 32
+    img = scenes.render_rgba(scene)
+    assert np.isfinite(img).all() and img[..., 0].max() > 1e9
+    scene.dacrt.film_exposure = 1.0
+    assert np.allclose(img[..., :3], scenes.render_rgba(scene)[..., :3] * 2.0 ** 32, rtol=1e-5)
+    # a file's stored value past it is clamped there and said
+    scene.dacrt['film_exposure'] = 1e30
+    said.clear()
+    scenes.render_rgba(scene)
+    assert "scene.dacrt.film_exposure is 1e+30, outside its range 0 .. 4.29497e+09" in " ".join(said), said
