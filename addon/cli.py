@@ -255,6 +255,11 @@ def render(args):
         raise SystemExit(f"error: no such .blend file: {args.blend}")
     if args.samples is not None and args.samples < 1:
         raise SystemExit("error: --samples must be at least 1")
+    frames = bpy.types.Scene.bl_rna.properties['frame_current']
+    if args.frame is not None and not frames.hard_min <= args.frame <= frames.hard_max:
+        # (Blender's frame range: frame_set had clamped a frame past it without a word, rendering
+        # another frame, or ended in a traceback beyond int32)
+        raise SystemExit(f"error: --frame must be within Blender's frame range {frames.hard_min} .. {frames.hard_max}")
     try:
         register()
     except ImportError as e:          # the native module does not load: say which Python it needs
