@@ -38,6 +38,7 @@ def mixed(parts, points, factor_of):
     if found is None:
         return None
     factor, needs = found
+    factor = _points(factor)
     out = []
     if not np.allclose(da, db, rtol=0.0, atol=1e-9):
         out.append((db - da, factor, frozenset(needs)))
@@ -61,7 +62,17 @@ def summed(parts, points, weights, needs):
 
 
 def _side(weights, k):
-    return lambda coords: weights(coords)[k]
+    return _points(lambda coords: weights(coords)[k])
+
+
+def _points(fn):
+    """fn, whose (n,) or (n, 1) values per point (a Layer Weight's or Fresnel's factor is a
+    column) it gives as (n,): a column times a row had made (n, n), which failed the render
+    (a Layer Weight Mix inside one mixed with a see-through side by a Noise)."""
+    def flat(coords):
+        out = np.asarray(fn(coords), np.float64)
+        return out.reshape(out.shape[0]) if out.ndim == 2 and out.shape[1] == 1 else out
+    return flat
 
 
 def _times(g, h):

@@ -41,7 +41,8 @@ def _factor(nt, kind):
 
 def _mix(nt, fac, a, b):
     mix = nt.nodes.new('ShaderNodeMixShader')
-    nt.links.new(fac, mix.inputs[0])
+    if fac is not None:
+        nt.links.new(fac, mix.inputs[0])
     nt.links.new(a.outputs[0], mix.inputs[1])
     nt.links.new(b.outputs[0], mix.inputs[2])
     return mix
@@ -86,3 +87,38 @@ def test_per_point_mix_weighs_each_sides_normal_by_the_factor_as_cycles(tmp_path
     diff = normal_pass_diff(tmp_path, sc, _material(kind, other), samples=64 if other == 'alpha' else 16)
     assert diff.mean() < 0.02 and np.mean(diff > 0.1) < 0.03, (diff.mean(), np.mean(diff > 0.1))
     assert not any('Normal pass' in s for s in said), said
+
+
+def _view_factor_beside_see_through():
+    """Mix(Noise, Mix(Layer Weight Facing, normal-mapped Diffuse, metallic Principled),
+    Mix(0.5, Diffuse, Transparent)): the inner factor is a column per point (a view-reading
+    chain's), the outer one's cut-out sum weighs it per point by a row (found by the session-74
+    fuzz, seed 204)."""
+    mat = bpy.data.materials.new('View factor beside see-through')
+    nt = mat.node_tree
+    nt.nodes.clear()
+    out = nt.nodes.new('ShaderNodeOutputMaterial')
+    nmap = world_normal_map(nt)
+    d = nt.nodes.new('ShaderNodeBsdfDiffuse')
+    d.inputs['Color'].default_value = (0.5, 0.4, 0.3, 1.0)
+    nt.links.new(nmap.outputs[0], d.inputs['Normal'])
+    p = nt.nodes.new('ShaderNodeBsdfPrincipled')
+    p.inputs['Metallic'].default_value = 1.0
+    facing = nt.nodes.new('ShaderNodeLayerWeight')
+    d2, clear = nt.nodes.new('ShaderNodeBsdfDiffuse'), nt.nodes.new('ShaderNodeBsdfTransparent')
+    for bsdf in (p, d2):
+        nt.links.new(nmap.outputs[0], bsdf.inputs['Normal'])
+    half = _mix(nt, None, d2, clear)
+    half.inputs[0].default_value = 0.5
+    inner = _mix(nt, facing.outputs['Facing'], d, p)
+    nt.links.new(_mix(nt, _factor(nt, 'noise'), inner, half).outputs[0], out.inputs['Surface'])
+    return mat
+
+
+def test_view_factor_mix_beside_a_see_through_side_renders_cycles_normal_pass(tmp_path):
+    """The render had failed ("operands could not be broadcast together", the (n, 1) factor
+    times the (n,) share made (n, n)); now its Normal pass is Cycles' as the other cut-out
+    sums' are."""
+    sc = normal_pass_scene()
+    diff = normal_pass_diff(tmp_path, sc, _view_factor_beside_see_through(), samples=64)
+    assert diff.mean() < 0.02 and np.mean(diff > 0.1) < 0.03, (diff.mean(), np.mean(diff > 0.1))
