@@ -31,26 +31,19 @@ struct Gather {
     size_t t_step;  // t_surf[i * t_step]: 4 reads the t of the tracer's hit records in place
 };
 
-// Adds what ray i sees of the lamp at list position k (kind and tree key hoisted by the
-// caller); nothing where it does not see the lamp.
-__attribute__((always_inline)) inline void gather_one(const Gather& g, const LampRecord& lamp, int kind, int32_t key,
+// Adds radiance Le (solid-angle pdf pdf_l) of the lamp at list position k (tree key key) that
+// ray i sees: the power heuristic against sampling it (BSDF rays), the throughput, the clamp.
+__attribute__((always_inline)) inline void gather_add(const Gather& g, const float Le[3], float pdf_l, int32_t key,
                                                       size_t k, size_t i) {
     const size_t n = g.n;
-    const float o[3] = {g.O[i], g.O[n + i], g.O[2 * n + i]};
-    const float d[3] = {g.D[i], g.D[n + i], g.D[2 * n + i]};
-    float Le[3] = {0.0f, 0.0f, 0.0f}, pdf_l = 0.0f;
-    const bool seen = kind == LAMP_SUN || kind == LAMP_BACKGROUND ? g.miss[i] && miss_lamp(lamp, d, Le, pdf_l)
-                                                                  : hit_lamp(lamp, o, d, g.t_surf[i * g.t_step], Le, pdf_l);
-    // most rays see none of the lamps they are tested against (a sun's disk, a small lamp the
-    // boxes or BVH list as near): they add nothing and are done, without the weight, the clamp and the
-    // film's three read-modify-writes (many lights: 16.6 -> 14.9 ms of lamp_gather per render)
-    if (!seen) return;
     float w = 1.0f;
     if (g.lamp_prob) {  // power heuristic of this BSDF hit against sampling the lamp
         float p_sel = g.lamp_prob[g.lamps[k]];
-        if (key >= 0)  // as picked from o with the vertex's normal
+        if (key >= 0) {  // as picked from o with the vertex's normal
+            const float o[3] = {g.O[i], g.O[n + i], g.O[2 * n + i]};
             p_sel = float(double(p_sel) * g.tree->pdf(o, g.normal, n, i, key,
                                                       g.receivers ? g.receivers[i] : LightTree::kAllSets));
+        }
         float r = p_sel * pdf_l / g.pdf_bsdf[i];
         r *= r;
         r += 1.0f;
@@ -65,6 +58,23 @@ __attribute__((always_inline)) inline void gather_one(const Gather& g, const Lam
     }
     clamp_light(v, g.clamp);  // each lamp a ray meets is its own contribution, as in Cycles
     for (int a = 0; a < 3; ++a) out[size_t(a) * g.N] += v[a];
+}
+
+// Adds what ray i sees of the lamp at list position k (kind and tree key hoisted by the
+// caller); nothing where it does not see the lamp.
+__attribute__((always_inline)) inline void gather_one(const Gather& g, const LampRecord& lamp, int kind, int32_t key,
+                                                      size_t k, size_t i) {
+    const size_t n = g.n;
+    const float o[3] = {g.O[i], g.O[n + i], g.O[2 * n + i]};
+    const float d[3] = {g.D[i], g.D[n + i], g.D[2 * n + i]};
+    float Le[3] = {0.0f, 0.0f, 0.0f}, pdf_l = 0.0f;
+    const bool seen = kind == LAMP_SUN || kind == LAMP_BACKGROUND ? g.miss[i] && miss_lamp(lamp, d, Le, pdf_l)
+                                                                  : hit_lamp(lamp, o, d, g.t_surf[i * g.t_step], Le, pdf_l);
+    // most rays see none of the lamps they are tested against (a sun's disk, a small lamp the
+    // boxes or BVH list as near): they add nothing and are done, without the weight, the clamp and the
+    // film's three read-modify-writes (many lights: 16.6 -> 14.9 ms of lamp_gather per render)
+    if (!seen) return;
+    gather_add(g, Le, pdf_l, key, k, i);
 }
 
 // gather_one for an area lamp without spread (area_lanes_apply) at list position k, tree key

@@ -74,6 +74,47 @@ inline int32_t tree_key(const Gather& g, size_t k) {  // the lamp's key in the l
     return g.tree && g.lamp_key ? g.lamp_key[g.lamps[k]] : -1;
 }
 
+// Whether a lamp is at infinity (a sun or the background): rays that missed everything see it.
+inline bool at_infinity(const LampRecord& lamp) {
+    const int kind = int(lamp.kind);
+    return kind == LAMP_SUN || kind == LAMP_BACKGROUND;
+}
+
+// gather_one of a lamp at infinity (list position k) over rays [b, e), the rays that see it
+// listed first, 64 at a time and without a branch per ray (which rays missed follows no
+// pattern: ray by ray, the test mispredicted as environment_gather's had), then added in
+// gather_one's operations, so the same bits.
+void gather_infinite(const Gather& g, const LampRecord& lamp, int32_t key, size_t k, size_t b, size_t e) {
+    const bool sun = int(lamp.kind) == LAMP_SUN;
+    if (sun && int(lamp.shape) == SUN_DELTA) return;  // (never seen)
+    constexpr size_t K = 64;
+    uint32_t idx[K];
+    const size_t n = g.n;
+    const float *Dx = g.D, *Dy = g.D + n, *Dz = g.D + 2 * n;
+    for (size_t i0 = b; i0 < e; i0 += K) {
+        const size_t c = std::min(K, e - i0);
+        size_t m = 0;
+        for (size_t q = 0; q < c; ++q) {  // miss_lamp's test: a sun's disk, or everywhere
+            const size_t i = i0 + q;
+            const float d[3] = {Dx[i], Dy[i], Dz[i]};
+            idx[m] = uint32_t(q);
+            m += size_t(g.miss[i] != 0) & size_t(!sun || lampmath::dot3(d, lamp.pos) >= lamp.cos_half);
+        }
+        for (size_t q = 0; q < m; ++q) {
+            const size_t i = i0 + idx[q];
+            const float d[3] = {Dx[i], Dy[i], Dz[i]};
+            float Le[3], pdf_l;
+            miss_lamp(lamp, d, Le, pdf_l);
+            gather_add(g, Le, pdf_l, key, k, i);
+        }
+    }
+}
+
+// gather_range for a list of lamps at infinity only.
+void gather_range_infinite(Gather g, size_t b, size_t e) {
+    for (size_t k = 0; k < g.nl; ++k) gather_infinite(g, g.rec[g.lamps[k]], tree_key(g, k), k, b, e);
+}
+
 // Lamp by lamp over the rays (each ray still adds its lamps in list order).
 void gather_range(Gather g, size_t b, size_t e) {
     for (size_t k = 0; k < g.nl; ++k) {
@@ -144,6 +185,12 @@ void lamp_gather(const LampRecord* rec, const int32_t* lamps, size_t nl, const f
                  const int32_t* lamp_key, const float* normal, const uint64_t* receivers, size_t t_step) {
     const Gather g{rec,  lamps, nl, lamp_prob, O,     D,        t_surf, miss,   thr,      pdf_bsdf,
                    pid,  n,     L,  N,         clamp, tree,     lamp_key, normal, receivers, t_step};
+    if (std::all_of(lamps, lamps + nl, [&](int32_t j) { return at_infinity(rec[j]); })) {
+        // the sun and the world: lamp by lamp over the rays that missed (each ray still adds
+        // its lamps in list order), no boxes or candidates
+        parallel_for(n, [&](size_t b, size_t e) { gather_range_infinite(g, b, e); });
+        return;
+    }
     if (nl < kLampBVHMin) {
         parallel_for(n, [&](size_t b, size_t e) { gather_range(g, b, e); });
         return;
