@@ -542,6 +542,21 @@ inline int LightTree::pick_of(const double p[4], double u, double& lo, double& w
     return pick;
 }
 
+// std::upper_bound(a, a + n, t) - a for n >= 1 (the first i with t < a[i], else n; the same
+// index for every t, NaN too), without branches: which member a walk ends at is random, and
+// the search's mispredicted steps were ~8-10% of walk_rows' perf samples (README, manylights).
+// The window [base, base + len] always holds the answer; each step halves it by one compare
+// whose outcome moves base by an integer select (cmov).
+inline size_t upper_slot(const double* a, size_t n, double t) {
+    size_t base = 0;
+    while (n > 1) {
+        const size_t half = n / 2;
+        base += t < a[base + half] ? 0 : half;
+        n -= half;
+    }
+    return base + (t < a[base] ? 0 : 1);
+}
+
 // The walk's end at leaf `at`: a member of its group by energy, with what is left of u.
 inline int32_t LightTree::leaf_pick(size_t at, double u, double lo, double w, double& prob) const {
     const size_t g = size_t(-1 - nodes_[at].child);
@@ -549,7 +564,7 @@ inline int32_t LightTree::leaf_pick(size_t at, double u, double lo, double w, do
     int32_t slot = b;
     if (e - b > 1) {
         const double t = std::clamp(w > 0.0 ? (u - lo) / w : 0.0, 0.0, 1.0);
-        slot = int32_t(std::upper_bound(member_cdf_.begin() + b, member_cdf_.begin() + e, t) - member_cdf_.begin());
+        slot = b + int32_t(upper_slot(member_cdf_.data() + b, size_t(e - b), t));
         slot = std::min(slot, e - 1);
         w *= member_share_[size_t(slot)];
     }
@@ -573,21 +588,21 @@ int32_t LightTree::sample(const float P[3], const float* N, double u, double& pr
     return leaf_pick(at, u, lo, w, prob);
 }
 
-// sample_rows' points, kRows at a time: each one's coordinates, normal, |normal| and max |P_k|
-// (TreePoint's fields), its walk's u, lo and w, and the order the walks are grouped in by stop
-// (ids); the rows a stop's points are copied into for its lanes (padded to 16), their weighs.
+// sample_rows' points, kRows at a time: each one's coordinates and normal, its walk's u, lo and
+// w, and the order the walks are grouped in by stop (ids); the rows a stop's points are copied
+// into for its lanes (padded to 16; the lanes work out |N| and max |P_k| from them), their weighs.
 struct LightTree::Rows {
     static constexpr size_t kRows = 512, kPad = 16;
     bool normal;
     const uint64_t* receivers;  // (per point, null: every set)
     size_t base;                // the first point's index in sample_rows' arrays
-    float pt[kRows][10];
+    float pt[kRows][6];
     double u[kRows], lo[kRows], w[kRows];
     int32_t ids[kRows], tmp[kRows];
     uint8_t pick[kRows];
     double t[4][kRows];  // each target's summed importance
     double su[kRows], slo[kRows], sw[kRows];  // a stop's walks' u, lo, w by position (pick_rows)
-    float rows[10][kRows + kPad];
+    float rows[6][kRows + kPad];
     float g[8][kRows + kPad];
     int32_t ok[8][kRows + kPad];
 };
@@ -727,12 +742,9 @@ void LightTree::walk_rows(Rows& r, size_t at, size_t b, size_t e, int32_t key[],
     const Stop& q = stops_[qi];
     for (size_t i = 0; i < m; ++i) {
         const float* t = r.pt[r.ids[b + i]];
-        for (int f = 0; f < 10; ++f) r.rows[f][i] = t[f];
+        for (int f = 0; f < 6; ++f) r.rows[f][i] = t[f];
     }
-    const TreeRows rows{{r.rows[0], r.rows[1], r.rows[2]},
-                        {r.normal ? r.rows[3] : nullptr, r.rows[4], r.rows[5]},
-                        {r.rows[6], r.rows[7], r.rows[8]},
-                        r.rows[9]};
+    const TreeRows rows{{r.rows[0], r.rows[1], r.rows[2]}, {r.normal ? r.rows[3] : nullptr, r.rows[4], r.rows[5]}};
     // An empty lane (no node) weighs 0 and repeats lane 0's bounds (build_stops), so its
     // distances are in float's range where lane 0's are: only that decides for its four.
     bool empty_hi = false;
@@ -743,7 +755,6 @@ void LightTree::walk_rows(Rows& r, size_t at, size_t b, size_t e, int32_t key[],
             empty_hi |= k >= 4;
     }
     const uint64_t* sets = stop_sets_.empty() ? nullptr : stop_sets_.data() + 12 * qi;
-    size_t count[4] = {};
     if (sets && r.receivers) {  // light linking: a walk at a time, its lanes masked by its sets
         for (size_t i = 0; i < m; ++i) {
             const int32_t id = r.ids[b + i];
@@ -754,9 +765,7 @@ void LightTree::walk_rows(Rows& r, size_t at, size_t b, size_t e, int32_t key[],
             const uint64_t rec = r.receivers[r.base + size_t(id)];
             double p[4];
             probs_of(nodes_.data(), q, rec == kAllSets ? nullptr : sets, rec, imp, p);
-            const int j = pick_of(p, r.u[id], r.lo[id], r.w[id]);
-            r.pick[i] = uint8_t(j);
-            ++count[j];
+            r.pick[i] = uint8_t(pick_of(p, r.u[id], r.lo[id], r.w[id]));
         }
     } else {
         // probs_of's steps pass by pass over the points (each target's summed importance, the
@@ -801,13 +810,25 @@ void LightTree::walk_rows(Rows& r, size_t at, size_t b, size_t e, int32_t key[],
         for (size_t i = 0; i < m; ++i) {
             const int32_t id = r.ids[b + i];
             r.lo[id] = r.slo[i], r.w[id] = r.sw[i];
-            ++count[r.pick[i]];
         }
     }
+    // the walks regrouped by target: counts and cursors kept in registers and chosen by masks
+    // (a histogram in memory, ++count[pick] and tmp[fill[pick]++], chained each walk to the
+    // last one's store: ~11% of walk_rows' perf samples)
+    size_t count[4] = {};
+    for (size_t i = 0; i < m; ++i)
+        for (int j = 0; j < 4; ++j) count[j] += r.pick[i] == j;
     size_t start[5] = {0};
     for (int j = 0; j < 4; ++j) start[j + 1] = start[j] + count[j];
-    size_t fill[4] = {start[0], start[1], start[2], start[3]};
-    for (size_t i = 0; i < m; ++i) r.tmp[fill[r.pick[i]]++] = r.ids[b + i];
+    {
+        size_t f0 = start[0], f1 = start[1], f2 = start[2], f3 = start[3];
+        for (size_t i = 0; i < m; ++i) {
+            const size_t k = r.pick[i];
+            const size_t m0 = -size_t(k == 0), m1 = -size_t(k == 1), m2 = -size_t(k == 2), m3 = -size_t(k == 3);
+            r.tmp[(f0 & m0) | (f1 & m1) | (f2 & m2) | (f3 & m3)] = r.ids[b + i];
+            f0 -= m0, f1 -= m1, f2 -= m2, f3 -= m3;
+        }
+    }
     std::copy(r.tmp, r.tmp + m, r.ids + b);
     for (int j = 0; j < 4; ++j) {
         if (!count[j]) continue;
@@ -832,14 +853,8 @@ void LightTree::sample_rows(size_t count, const float* P, const float* N, size_t
         const size_t m = std::min(Rows::kRows, count - b);
         r->base = b;
         for (size_t i = 0; i < m; ++i) {
-            const float Q[3] = {P[b + i], P[stride + b + i], P[2 * stride + b + i]};
-            TreePoint t;
-            tree_point(t, Q, nullptr);
             float* o = r->pt[i];
-            for (int a = 0; a < 3; ++a) o[a] = t.P[a], o[3 + a] = 0.0f, o[6 + a] = 0.0f;
-            if (N)
-                for (int a = 0; a < 3; ++a) o[3 + a] = N[a * stride + b + i], o[6 + a] = std::fabs(o[3 + a]);
-            o[9] = t.pm;
+            for (size_t a = 0; a < 3; ++a) o[a] = P[a * stride + b + i], o[3 + a] = N ? N[a * stride + b + i] : 0.0f;
             r->u[i] = u[b + i] >= 0.0 ? u[b + i] : 0.0;  // (NaN too)
             r->lo[i] = 0.0, r->w[i] = 1.0;
             r->ids[i] = int32_t(i);

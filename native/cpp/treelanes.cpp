@@ -91,6 +91,10 @@ LANES W8 root(const W8& x) {
     for (int k = 0; k < 8; ++k) r[k] = std::sqrt(x[k]);
     return r;
 }
+// |x| lane by lane, as std::fabs (the sign bit cleared: -0 gives +0).
+LANES F4 abs_(F4 x) { return (F4)((M4)x & M4{} + 0x7fffffff); }
+LANES F8 abs_(F8 x) { return {abs_(x.lo), abs_(x.hi)}; }
+LANES W8 abs_(const W8& x) { return (W8)((WM8)x & WM8{} + 0x7fffffff); }
 LANES float lane(F8 v, int k) { return k < 4 ? v.lo[k] : v.hi[k - 4]; }
 LANES float lane(const W8& v, int k) { return v[k]; }
 // Bit h: some lane of four h is clear.
@@ -150,8 +154,13 @@ struct LaneAt {
     LANES V slab() const { return splat<V>(q.slab[k]); }
     LANES V P(int a) const { return load<V>(rows.P[a] + i); }
     LANES V N(int a) const { return load<V>(rows.N[a] + i); }
-    LANES V abs_n(int a) const { return load<V>(rows.abs_n[a] + i); }
-    LANES V pm() const { return load<V>(rows.pm + i); }
+    // tree_point's: std::fabs, and std::max of the three (the first largest, NaN as it compares)
+    LANES V abs_n(int a) const { return abs_(N(a)); }
+    LANES V pm() const {
+        const V a = abs_(P(0)), b = abs_(P(1)), c = abs_(P(2));
+        const V ab = sel(a < b, b, a);
+        return sel(ab < c, c, ab);
+    }
 };
 
 // Lanes weighed as lighttree.cpp's weigh() does, in float: enough for a sampling estimate once

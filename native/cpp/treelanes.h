@@ -32,13 +32,12 @@ using StopWeighFn = int (*)(const LightTree::Stop& q, const TreePoint& at, doubl
 // The widest kernel the CPU runs, or a narrower one DACRT_ISA names (portable, avx2).
 StopWeighFn stop_weigh_fn();
 
-// Points side by side, a row per coordinate (TreePoint's fields; N[0] null: no normals), each
-// row readable for a whole number of 16 past the points it holds.
+// Points side by side, a row per coordinate (N[0] null: no normals), each row readable for a
+// whole number of 16 past the points it holds. TreePoint's |N_k| and max |P_k| the lanes work
+// out from these (exact: the same bits), so that a walk copies six rows per stop, not ten.
 struct TreeRows {
     const float* P[3];
     const float* N[3];
-    const float* abs_n[3];
-    const float* pm;
 };
 // Lane k of stop q weighed at the rows' points [0, m), as StopWeighFn weighs it at each (the
 // same bits): g[i] the weigh before the lane's energy, ok[i] (-1 or 0) whether the lane's

@@ -228,3 +228,35 @@ def test_lights_below_the_receivers_horizon_are_not_picked():
     straddle = tree_of([[3.0, -3.0], [0.0, 0.0], [-0.1, 1.0]], 0.3, [1.0, 1.0])
     p = straddle.pdf(np.repeat(P, 2, 1), np.array([0, 1]), N=np.repeat(N, 2, 1))
     assert p[0] > 0 and p.sum() == pytest.approx(1.0)
+
+
+@pytest.mark.parametrize("m", [1, 2, 3, 7, 8, 9, 64, 121, 1000])
+def test_group_member_pick_is_the_cdf_upper_bound(m):
+    """Within a group leaf a walk takes the first member whose cumulative energy share exceeds
+    t = (u - lo) / w (std::upper_bound; the last one where rounding leaves t past them all),
+    found by a branch-free search (lighttree.cpp upper_slot): at u exactly on every share's
+    bound, one ULP either side, 0, NaN, negative and just below 1, with repeated energies (runs
+    of equal bounds) and faint ones, one group at the root (lo = 0, w = 1: t = u), walked
+    singly and stop by stop."""
+    rng = np.random.default_rng(m)
+    E = rng.uniform(0.5, 4.0, m)
+    E[rng.random(m) < 0.3] = 2.0                    # runs of equal shares
+    E[rng.random(m) < 0.1] = 1e-30                  # shares too small to move the bound
+    total = 0.0
+    for e in E:                                     # the tree's own sums, in member order
+        total += e
+    cdf = np.cumsum(E) / total
+    cdf[-1] = 1.0
+    f32 = lambda a: np.asarray(a, F32)
+    c = rng.uniform(-1, 1, (3, m))
+    tree = lamps.light_tree(f32(c - 0.1), f32(c + 0.1), np.tile([[0.0], [0.0], [1.0]], (1, m)), np.full(m, EVERY),
+                            np.zeros(m), E, np.arange(m), np.zeros(m, np.int64))
+    u = np.concatenate([cdf, np.nextafter(cdf, 0.0), np.nextafter(cdf, 2.0),
+                        [0.0, np.nan, -0.5, np.nextafter(1.0, 0.0), 1.0]])
+    want = np.minimum(np.searchsorted(cdf, np.where(u >= 0.0, np.minimum(u, 1.0), 0.0), side='right'), m - 1)
+    P = np.zeros((3, len(u)), F32)
+    for rows in (False, True):
+        key, prob = tree.sample(P, u, rows=rows)
+        assert key.tolist() == want.tolist()
+        share = E[want] / total if m > 1 else np.ones(len(u))
+        assert prob.view(np.uint64).tolist() == share.view(np.uint64).tolist()
