@@ -605,6 +605,7 @@ struct LightTree::Rows {
     float rows[6][kRows + kPad];
     float g[8][kRows + kPad];
     int32_t ok[8][kRows + kPad];
+    int32_t fours[2][kRows];  // per walk: lanes 0-3's, 4-7's ok ANDed (-1: in float's range)
 };
 
 namespace {
@@ -784,10 +785,22 @@ void LightTree::walk_rows(Rows& r, size_t at, size_t b, size_t e, int32_t key[],
             const double ec = q.energy[c];
             for (size_t i = 0; i < m; ++i) t[i] += ec * double(r.g[c][i]);
         }
+        // which fours left float's range at each walk: the filled lanes' ok rows ANDed per four
+        // in vectors (an empty lane among 4-7 by lane 0's), rather than eight tests per walk
+        int32_t* const fours[2] = {r.fours[0], r.fours[1]};
+        std::fill(fours[0], fours[0] + m, -1);
+        std::fill(fours[1], fours[1] + m, -1);
+        for (int k = 0; k < 8; ++k) {
+            if (q.node[k] < 0) continue;
+            int32_t* const f = fours[k < 4 ? 0 : 1];
+            const int32_t* const ok = r.ok[k];
+            for (size_t i = 0; i < m; ++i) f[i] &= ok[i];
+        }
+        if (empty_hi)
+            for (size_t i = 0; i < m; ++i) fours[1][i] &= r.ok[0][i];
         for (size_t i = 0; i < m; ++i) {
-            int bad = empty_hi && !r.ok[0][i] ? 2 : 0;
-            for (int k = 0; k < 8; ++k) bad |= q.node[k] >= 0 && !r.ok[k][i] ? (k < 4 ? 1 : 2) : 0;
-            if (!bad) continue;
+            if ((fours[0][i] & fours[1][i]) == -1) continue;
+            const int bad = (fours[0][i] ? 0 : 1) | (fours[1][i] ? 0 : 2);
             double imp[8];
             lane_imps(q, r, i, empty_hi, imp);
             const float* P = r.pt[r.ids[b + i]];
