@@ -108,7 +108,7 @@ def test_native_pixel_samples_equal_keys_uniforms_and_filter_lookup(kind, width)
         dacrt.shading.pixel_samples(np.array([-1]), np.array([0]), w, 1, 2, 3, 4, filt.table)
 
 
-@pytest.mark.parametrize('s0, ns', [(0, 1), (0, 3), (5, 7), (0, 64), (4000, 96)])
+@pytest.mark.parametrize('s0, ns', [(0, 1), (0, 3), (5, 7), (0, 64), (4000, 96), (0, 600), (1, 513)])
 def test_block_samples_equal_pixel_samples_of_the_pairs(s0, ns):
     """The render loop's camera samples of a pixel-major block (every pixel for samples s0 ..
     s0 + ns - 1) are pixel_samples' of the (pixel, sample) pairs bit for bit, also where a
