@@ -556,3 +556,37 @@ def test_bad_arguments():
     with pytest.raises(ValueError, match=r'pid\[3\] = 2 repeats an earlier pid'):
         gather(rec, [0], P, D, t, miss, np.asarray([0, 1, 2, 2, 4, 5, 6, 7, 8, 9]), L)
     assert not L.any()                                # nothing was added by the failed calls
+
+
+def test_lamp_gather_checks_pids_at_every_place_and_length():
+    """The gathers' pid check (one pass for ascending pids within range, else the full check)
+    refuses a repeat, a step down, a negative or an out-of-range pid wherever it sits in arrays
+    of every length around the vector widths, and takes ascending pids with gaps: the world
+    is then added to exactly their columns."""
+    rng = np.random.default_rng(11)
+    rec = lamp_records([make('background')])
+    gather = dacrt.lamps.lamp_gather
+    for n in list(range(1, 40)) + [63, 64, 65, 127, 128, 129, 1000]:
+        P = points(rng, n)
+        D = np.tile(np.asarray([[0.0], [0.0], [1.0]], F32), n)
+        t = np.full(n, np.inf, F32)
+        miss = np.ones(n, bool)
+        pid = np.cumsum(rng.integers(1, 3, n)) - 1          # ascending, with gaps
+        N = int(pid[-1]) + 1
+        L = np.zeros((3, N), F32)
+        gather(rec, [0], P, D, t, miss, pid, L)
+        added = L.any(axis=0)
+        assert np.array_equal(np.flatnonzero(added), pid)
+        for at in sorted({0, n // 2, n - 1}):
+            bad = pid.copy()
+            bad[at] = N if at == n - 1 else -1 if at == 0 else bad[at - 1]
+            L2 = np.zeros((3, N), F32)
+            with pytest.raises(ValueError, match=rf'pid\[{at}\] = {bad[at]} (is outside|repeats)'):
+                gather(rec, [0], P, D, t, miss, bad, L2)
+            assert not L2.any()
+            if at:                                      # a step down: distinct and in range, taken
+                down = pid.copy()
+                down[at - 1], down[at] = pid[at], pid[at - 1]
+                L3 = np.zeros((3, N), F32)
+                gather(rec, [0], P, D, t, miss, down, L3)
+                assert np.array_equal(L3, L)
