@@ -16,7 +16,7 @@ rectangle bounding them there, which must cover some point twice (the smallest o
 along the edges of one triangle; a Mirror's faces mostly fill theirs), and above _MAX_GROUP only
 their pairs whose bounding boxes meet (a Screw of a flat profile about its normal: 1440 triangles
 in one plane, pixels 2.5-3.2x Cycles); groups under the bound, in their pairs of separate pieces
-whose boxes overlap (_sparse_group: a text instanced on points in one plane, pixels 1.3-1.7x). Every pair is tested exactly in the
+whose boxes overlap (_sparse_pairs: a text instanced on points in one plane, pixels 1.3-1.7x). Every pair is tested exactly in the
 first one's plane: the other's corners within _PAIR_ULPS float32 ulps of the pair's own largest
 coordinate of it (surfaces further apart are met in one order by both tracers), and separating
 axes (the six edge normals), each overlap deeper than that. So faces overlapping within a plane
@@ -95,12 +95,12 @@ def _found_in_groups(c, t, geo, keys, candidates, step, out, first=None):
         start = np.concatenate([[0], np.cumsum(size)])
     start = start[:-1]
     pi, pj = [], []
+    sparse = []         # (starts of the groups under the area bound, their size), per size
     for s in np.unique(size):
         g = start[size == s]
         if s > _SMALL:
             bound = _bound_exceeded(c, rows, g, s, step)
-            for g0 in g[~bound]:
-                _sparse_group(c, t, geo, rows[g0:g0 + s], out)
+            sparse.append((g[~bound], s))
             g = g[bound]
         if s > _MAX_GROUP:
             for g0 in g:
@@ -108,6 +108,16 @@ def _found_in_groups(c, t, geo, keys, candidates, step, out, first=None):
             continue
         a, b = np.triu_indices(s, 1)
         pi.append(rows[(g[:, None] + a).ravel()]), pj.append(rows[(g[:, None] + b).ravel()])
+    # the sparse groups' pairs, all groups at once (one group at a time, bmw27's ~700 such groups
+    # had cost ~0.5 s of CPU a frame in numpy calls on a few dozen triangles each); tested with
+    # the rest below (a group's triangles are in no other group of this pass, so what _big_group
+    # reads of out is not changed by testing them later)
+    if sparse:
+        g = np.concatenate([g for g, _ in sparse])
+        n = np.concatenate([np.full(len(g), s, np.int64) for g, s in sparse])
+        if len(g):
+            a, b = _sparse_pairs(c, t, rows, g, n)
+            pi.append(a), pj.append(b)
     if not pi:
         return
     i, j = np.concatenate(pi), np.concatenate(pj)
@@ -158,50 +168,87 @@ def _big_group(c, t, geo, rows, out):
     _test(c, t, geo, rows[a], rows[b], out)
 
 
-def _sparse_group(c, t, geo, rows, out):
-    """Marks in out the triangles rows of a group under the area bound overlapping another of it
-    (copies of a sparse shape laid over each other: a text's letters instanced on points in one
-    plane leave most of the rectangle bounding them empty): the pairs whose bounding boxes come
-    within twice the group's largest pair tolerance on every axis, found by sweeping along the
-    axis the group spreads most (no pair matrix: a 4000-triangle floor's ~6 neighbours each),
-    nearest box centres first, at most _BUDGET pairs (beyond, a lower bound: still true)."""
-    # only pairs of separate pieces (joined by no corner index): a piece's own faces are its
-    # mesh's neighbours, whose folds the area bound and _folds are for; a plane of one piece (a
-    # split floor, a fan of 1500 slivers all sharing the centre: ~500K pairs) costs nothing here
-    verts, local = np.unique(t[rows], return_inverse=True)
+def _sparse_pairs(c, t, rows, starts, sizes):
+    """The pairs (i, j) to test of the groups under the area bound (group k: rows[starts[k]:
+    starts[k] + sizes[k]]): copies of a sparse shape laid over each other (a text's letters
+    instanced on points in one plane leave most of the rectangle bounding them empty). Per group,
+    the pairs whose bounding boxes come within twice the group's largest pair tolerance on every
+    axis, found by sweeping along the axis the group spreads most (no pair matrix: a
+    4000-triangle floor's ~6 neighbours each), nearest box centres first, at most _BUDGET pairs
+    (beyond, a lower bound: still true). All groups in one set of numpy passes, each group's
+    pairs as if it were swept alone."""
+    G = len(starts)
+    gid = np.repeat(np.arange(G), sizes)                                 # each row's group
+    sel = np.repeat(starts - (np.cumsum(sizes) - sizes), sizes) + np.arange(int(sizes.sum()))
+    r = rows[sel]
+    first = np.cumsum(sizes) - sizes                                     # each group's first row in r
+    # only pairs of separate pieces (joined by no corner index within the group): a piece's own
+    # faces are its mesh's neighbours, whose folds the area bound and _folds are for; a plane of
+    # one piece (a split floor, a fan of 1500 slivers all sharing the centre: ~500K pairs) costs
+    # nothing here. Corners are keyed by (group, vertex): pieces never join across groups
+    corner = gid[:, None].astype(np.int64) * (int(t.max(initial=0)) + 1) + t[r]
+    verts, local = np.unique(corner, return_inverse=True)
     local = local.reshape(-1, 3).astype(np.int32)
     piece = dacrt.shading.island_roots(len(verts), np.r_[local[:, :2], local[:, 1:]])[local[:, 0]]
-    if (piece == piece[0]).all():
-        return
-    tri = c[rows]
+    several = np.minimum.reduceat(piece, first) != np.maximum.reduceat(piece, first)
+    keep = several[gid]
+    if not keep.any():
+        return np.zeros(0, np.int64), np.zeros(0, np.int64)
+    if not keep.all():
+        sizes, r, piece = sizes[several], r[keep], piece[keep]
+        G = len(sizes)
+        gid = np.repeat(np.arange(G), sizes)
+        first = np.cumsum(sizes) - sizes
+    tri = c[r]
     lo, hi = tri.min(axis=1), tri.max(axis=1)
-    big = max(float(np.abs(tri).max()), 1e-30)
-    margin = 2 * _PAIR_ULPS * float(np.spacing(np.float32(big)))
-    spread = np.argsort(hi.max(axis=0) - lo.min(axis=0))[::-1]
-    ax = int(spread[0])
-    order = np.argsort(lo[:, ax], kind='stable')
-    los = lo[order, ax]
-    # for each triangle (in sweep order), the later ones whose box starts before its own ends
-    end = np.searchsorted(los, hi[order, ax] - margin, side='left')
-    count = np.maximum(end - np.arange(len(order)) - 1, 0)     # (a box thinner than the margin: none)
-    if count.sum() > 8 * _BUDGET:       # (long slivers: every box over every other; bounded memory)
-        count = np.minimum(count, 8 * _BUDGET // len(order))
-    a = np.repeat(np.arange(len(order)), count)
+    big = np.maximum(np.maximum.reduceat(np.abs(tri).max(axis=(1, 2)), first), 1e-30)
+    margin = 2 * _PAIR_ULPS * np.spacing(big.astype(np.float32)).astype(np.float64)
+    spread = np.argsort(np.maximum.reduceat(hi, first) - np.minimum.reduceat(lo, first), axis=1)[:, ::-1]
+    ax = spread[:, 0]
+    key = lo[np.arange(len(r)), ax[gid]]
+    order = np.lexsort((key, gid))                                       # per group, stable by lo
+    los = key[order]
+    # for each triangle (in sweep order), the later ones of its group whose box starts before its
+    # own ends: searchsorted(los of the group, hi - margin, 'left'), for all groups in one sort
+    # (queries before equal boxes: those do not count)
+    og = gid[order]
+    query = hi[order, ax[og]] - margin[og]
+    n = len(order)
+    merged = np.lexsort((np.r_[np.ones(n, np.int8), np.zeros(n, np.int8)], np.r_[los, query], np.r_[og, og]))
+    is_query = merged >= n
+    below = np.cumsum(~is_query) - ~is_query                             # boxes before each entry
+    end = np.empty(n, np.int64)
+    end[merged[is_query] - n] = below[is_query]
+    count = np.maximum(end - np.arange(n) - 1, 0)                        # (a box thinner than the margin: none)
+    # (long slivers: every box over every other; bounded memory)
+    total = np.bincount(og, weights=count, minlength=G)
+    capped = total > 8 * _BUDGET
+    if capped.any():
+        count = np.where(capped[og], np.minimum(count, 8 * _BUDGET // sizes[og]), count)
+    a = np.repeat(np.arange(n), count)
     b = a + 1 + (np.arange(len(a)) - np.repeat(np.cumsum(count) - count, count))
+    pg = og[a]
     a, b = order[a], order[b]
     # boxes overlapping deeper than the margin along the two axes the plane spreads along
     # (boxes only touching, as a grid's neighbours' do, leave at most an overlap too thin to
     # z-fight visibly: left, as everywhere here, rather than tested pair by pair)
-    near = np.ones(len(a), bool)
-    for k, d in enumerate(spread.tolist()):
+    near = piece[a] != piece[b]
+    m = margin[pg]
+    for k in range(3):
+        d = spread[pg, k]
         depth = np.minimum(hi[a, d], hi[b, d]) - np.maximum(lo[a, d], lo[b, d])
-        near &= depth > margin if k < 2 else depth >= -margin
-    near &= piece[a] != piece[b]
-    a, b = a[near], b[near]
-    if len(a) > _BUDGET:
+        near &= depth > m if k < 2 else depth >= -m
+    a, b, pg = a[near], b[near], pg[near]
+    many = np.flatnonzero(np.bincount(pg, minlength=G) > _BUDGET)
+    if len(many):
         mid = 0.5 * (lo + hi)
-        a, b = (x[np.argsort(np.square(mid[a] - mid[b]).sum(axis=1), kind='stable')[:_BUDGET]] for x in (a, b))
-    _test(c, t, geo, rows[a], rows[b], out)
+        drop = np.zeros(len(a), bool)
+        for g in many.tolist():                 # (rare: the nearest box centres first)
+            at = np.flatnonzero(pg == g)
+            ga, gb = a[at], b[at]
+            drop[at[np.argsort(np.square(mid[ga] - mid[gb]).sum(axis=1), kind='stable')[_BUDGET:]]] = True
+        a, b = a[~drop], b[~drop]
+    return r[a], r[b]
 
 
 def _folds(t, i, j):
@@ -260,18 +307,39 @@ def _bound_exceeded(c, rows, g, s, tol):
     return total > box * (1.0 + 1e-6) + tol * tol
 
 
+def _smallest(x, axis):
+    """x.min(axis) (the same values, NaN too) as a chain of np.minimum over the axis' slices:
+    numpy's reduction over a short axis is several times slower."""
+    x = np.moveaxis(x, axis, 0)
+    out = np.minimum(x[0], x[1])
+    for k in range(2, len(x)):
+        np.minimum(out, x[k], out=out)
+    return out
+
+
+def _largest(x, axis):
+    """x.max(axis), as _smallest."""
+    x = np.moveaxis(x, axis, 0)
+    out = np.maximum(x[0], x[1])
+    for k in range(2, len(x)):
+        np.maximum(out, x[k], out=out)
+    return out
+
+
 def _pairs_overlap(a, b, folds):
     """Mask (P,) of the pairs of triangles a, b (P, 3, 3) lying in one plane, facing one way or,
     where folds (P,), opposite ways (b's corners within _PAIR_ULPS float32 ulps of the pair's
     largest coordinate of a's plane, the winding normals alike or opposite) whose interiors overlap deeper than that along each of the six edge
     normals (separating axes: exact for two convex shapes). Surfaces further apart are met in one
     order by both tracers (a ray's float test errs by a few ulps of the coordinates)."""
-    big = np.maximum(np.abs(a).max(axis=(1, 2)), np.abs(b).max(axis=(1, 2)))
+    # (min and max over the short axes as chains of np.minimum / np.maximum: the same values,
+    # numpy's reductions over an axis of 3 had been ~5x slower: bmw27's 180K pairs 0.11 s)
+    big = np.maximum(_largest(np.abs(a).reshape(len(a), 9), 1), _largest(np.abs(b).reshape(len(b), 9), 1))
     tol = _PAIR_ULPS * np.spacing(np.maximum(big, 1e-30).astype(np.float32)).astype(np.float64)
     # (boxes first: a pair that overlaps has a point of a within tol of a point of b, so their
     # bounding boxes come within tol on every axis; 2 tol leaves room for rounding. A 1M-triangle
     # wave frame's 625 pairs left after _quads: 63 near)
-    lo_a, hi_a, lo_b, hi_b = a.min(axis=1), a.max(axis=1), b.min(axis=1), b.max(axis=1)
+    lo_a, hi_a, lo_b, hi_b = _smallest(a, 1), _largest(a, 1), _smallest(b, 1), _largest(b, 1)
     near = ((lo_b <= hi_a + 2 * tol[:, None]) & (lo_a <= hi_b + 2 * tol[:, None])).all(axis=1)
     out = np.zeros(len(a), bool)
     if near.any():
@@ -288,6 +356,11 @@ def _overlap_in_plane(a, b, tol, folds):
     flat = (np.abs(np.einsum('pkd,pd->pk', b - o[:, None], n)) <= tol[:, None]).all(axis=1)
     cos = np.einsum('pd,pd->p', n, nb)
     flat &= (cos >= _PARALLEL) | (folds & (cos <= -_PARALLEL))
+    if not flat.all():      # (the rest for the pairs in one plane only; each pair's own numbers)
+        out = flat.copy()
+        if flat.any():
+            out[flat] = _overlap_in_plane(a[flat], b[flat], tol[flat], folds[flat])
+        return out
     p = [np.stack([np.einsum('pkd,pd->pk', x - o[:, None], u), np.einsum('pkd,pd->pk', x - o[:, None], w)], axis=2)
          for x in (a, b)]
     axes = []
@@ -297,7 +370,7 @@ def _overlap_in_plane(a, b, tol, folds):
         axes.append(ax / np.maximum(np.linalg.norm(ax, axis=-1, keepdims=True), 1e-300))
     axes = np.concatenate(axes, axis=1)                                  # (P, 6, 2)
     pa, pb = (np.einsum('pad,pkd->pak', axes, q) for q in p)             # (P, 6, 3)
-    depth = np.minimum(pa.max(axis=2), pb.max(axis=2)) - np.maximum(pa.min(axis=2), pb.min(axis=2))
+    depth = np.minimum(_largest(pa, 2), _largest(pb, 2)) - np.maximum(_smallest(pa, 2), _smallest(pb, 2))
     return flat & (depth > tol[:, None]).all(axis=1)
 
 
