@@ -104,3 +104,43 @@ def test_short_axis_chains_are_numpys_reductions(shape, axis):
     x.flat[5::41] = -0.0
     np.testing.assert_array_equal(of._smallest(x, axis), x.min(axis=axis))
     np.testing.assert_array_equal(of._largest(x, axis), x.max(axis=axis))
+
+
+def _one_size(c, rows, g, s):
+    """(total, box) of the groups of size s starting at g, as the area bound computed them one
+    size at a time before the batching (overlappingfaces._bound_exceeded then)."""
+    tri = c[rows[g[:, None] + np.arange(s)].ravel()].reshape(len(g), s, 3, 3)
+    box = np.inf
+    for k in range(3):
+        f = np.roll(tri[:, 0], -k, axis=1)
+        o, u, w, n = of._frame(f)
+        rel = tri - o[:, None, None, :]
+        p = np.stack([np.einsum('gtkd,gd->gtk', rel, u), np.einsum('gtkd,gd->gtk', rel, w)], axis=-1)
+        box = np.minimum(box, np.prod(p.max(axis=(1, 2)) - p.min(axis=(1, 2)), axis=1))
+    e1, e2 = p[:, :, 1] - p[:, :, 0], p[:, :, 2] - p[:, :, 0]
+    return 0.5 * np.abs(e1[..., 0] * e2[..., 1] - e1[..., 1] * e2[..., 0]).sum(axis=1), box
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_area_bound_of_all_sizes_at_once_is_each_sizes_own(seed):
+    """The same floats, bit for bit, as one size at a time: sizes 17 to 700 (numpy's pairwise
+    sums over 8- and 128-element blocks), groups in mixed order, scales from 1e-3 to 1e3."""
+    rng = np.random.default_rng(seed)
+    sizes = rng.choice([17, 18, 25, 130, 700], 15)
+    n = int(sizes.sum())
+    v = (rng.normal(size=(3 * n, 3)) * 10.0 ** rng.integers(-3, 4, size=(3 * n, 1))).astype(np.float32)
+    t = rng.permutation(3 * n).reshape(n, 3).astype(np.int32)
+    c = of._Corners(v, t)
+    rows = rng.permutation(n).astype(np.int64)
+    starts = np.cumsum(sizes) - sizes
+    perm = rng.permutation(len(sizes))
+    total, box = of._areas_and_box(c, rows, starts[perm], sizes[perm])
+    for k, (g, s) in enumerate(zip(starts[perm], sizes[perm])):
+        want_total, want_box = _one_size(c, rows, np.array([g]), int(s))
+        assert total[k].tobytes() == want_total[0].tobytes() and box[k].tobytes() == want_box[0].tobytes()
+    # and together with the other groups of their size, as _found_in_groups had called it
+    for s in np.unique(sizes):
+        k = np.flatnonzero(sizes[perm] == s)
+        want_total, want_box = _one_size(c, rows, starts[perm][k], int(s))
+        np.testing.assert_array_equal(total[k], want_total)
+        np.testing.assert_array_equal(box[k], want_box)
