@@ -130,19 +130,52 @@ def _found_in_groups(c, t, geo, keys, candidates, step, out, first=None):
 
 
 def _test(c, t, geo, i, j, out):
-    """Marks in out the triangles of the pairs i, j overlapping in part (quads' pairs left)."""
+    """Marks in out the triangles of the pairs i, j (quads' pairs left) lying in one plane, facing
+    one way or, where they fold over an edge they share (_folds), opposite ways (the second's
+    corners within _PAIR_ULPS float32 ulps of the pair's largest coordinate of the first's plane,
+    the winding normals alike or opposite) whose interiors overlap deeper than that along each of
+    the six edge normals (separating axes: exact for two convex shapes). Surfaces further apart
+    are met in one order by both tracers (a ray's float test errs by a few ulps of the
+    coordinates)."""
     keep = ~_quads(t, np.asarray(geo[9:12]), i, j)
     i, j = i[keep], j[keep]
+    if not len(i):
+        return
+    # each triangle's corners, box and largest |coordinate| once (a small group's triangle is in
+    # up to 15 pairs; bmw27's 208K pairs gathered and reduced their corners pair by pair)
+    if 16 * len(i) < len(t):   # (few pairs among many triangles: no arrays of the triangles' size)
+        tri, at = np.unique(np.r_[i, j], return_inverse=True)
+        i, j = at[:len(i)], at[len(i):]
+    else:
+        mark = np.zeros(len(t), bool)
+        mark[i] = mark[j] = True
+        tri = np.flatnonzero(mark)
+        slot = np.empty(len(t), np.int64)
+        slot[tri] = np.arange(len(tri))
+        i, j = slot[i], slot[j]
+    corners = c[tri]
+    # (min and max over the short axes as chains of np.minimum / np.maximum: the same values,
+    # numpy's reductions over an axis of 3 had been ~5x slower)
+    lo, hi = _smallest(corners, 1), _largest(corners, 1)
+    big = _largest(np.abs(corners).reshape(len(tri), 9), 1)
     for k in range(0, len(i), _CHUNK):         # (a big group's pairs: bounded memory)
         a, b = i[k:k + _CHUNK], j[k:k + _CHUNK]
-        hit = _pairs_overlap(c[a], c[b], _folds(t, a, b))
-        out[a[hit]] = out[b[hit]] = True
+        tol = _PAIR_ULPS * np.spacing(np.maximum(np.maximum(big[a], big[b]), 1e-30).astype(np.float32)).astype(np.float64)
+        # (boxes first: a pair that overlaps has a point of one within tol of a point of the
+        # other, so their bounding boxes come within tol on every axis; 2 tol leaves room for
+        # rounding. A 1M-triangle wave frame's 625 pairs left after _quads: 63 near)
+        near = ((lo[b] <= hi[a] + 2 * tol[:, None]) & (lo[a] <= hi[b] + 2 * tol[:, None])).all(axis=1)
+        if not near.any():
+            continue
+        a, b, tol = a[near], b[near], tol[near]
+        hit = _overlap_in_plane(corners[a], corners[b], tol, _folds(t, tri[a], tri[b]))
+        out[tri[a[hit]]] = out[tri[b[hit]]] = True
 
 
 def _big_group(c, t, geo, rows, out):
     """Marks in out the triangles rows of a group above _MAX_GROUP overlapping another of it: of
     the pairs whose bounding boxes come within twice the group's largest pair tolerance on every
-    axis (_pairs_overlap's own box test, looser), first each triangle's _NEAREST with the closest
+    axis (_test's own box test, looser), first each triangle's _NEAREST with the closest
     box centres (a Screw's steps: each overlaps the next, all found there), then those with a
     triangle not found yet, at most _BUDGET pairs (a floor with a rug on it: a few neighbours each).
     Past the budget, triangles are left unsaid: the count said is then a lower bound, still true."""
@@ -351,29 +384,8 @@ def _largest(x, axis):
     return out
 
 
-def _pairs_overlap(a, b, folds):
-    """Mask (P,) of the pairs of triangles a, b (P, 3, 3) lying in one plane, facing one way or,
-    where folds (P,), opposite ways (b's corners within _PAIR_ULPS float32 ulps of the pair's
-    largest coordinate of a's plane, the winding normals alike or opposite) whose interiors overlap deeper than that along each of the six edge
-    normals (separating axes: exact for two convex shapes). Surfaces further apart are met in one
-    order by both tracers (a ray's float test errs by a few ulps of the coordinates)."""
-    # (min and max over the short axes as chains of np.minimum / np.maximum: the same values,
-    # numpy's reductions over an axis of 3 had been ~5x slower: bmw27's 180K pairs 0.11 s)
-    big = np.maximum(_largest(np.abs(a).reshape(len(a), 9), 1), _largest(np.abs(b).reshape(len(b), 9), 1))
-    tol = _PAIR_ULPS * np.spacing(np.maximum(big, 1e-30).astype(np.float32)).astype(np.float64)
-    # (boxes first: a pair that overlaps has a point of a within tol of a point of b, so their
-    # bounding boxes come within tol on every axis; 2 tol leaves room for rounding. A 1M-triangle
-    # wave frame's 625 pairs left after _quads: 63 near)
-    lo_a, hi_a, lo_b, hi_b = _smallest(a, 1), _largest(a, 1), _smallest(b, 1), _largest(b, 1)
-    near = ((lo_b <= hi_a + 2 * tol[:, None]) & (lo_a <= hi_b + 2 * tol[:, None])).all(axis=1)
-    out = np.zeros(len(a), bool)
-    if near.any():
-        out[near] = _overlap_in_plane(a[near], b[near], tol[near], folds[near])
-    return out
-
-
 def _overlap_in_plane(a, b, tol, folds):
-    """_pairs_overlap's test of pairs a, b (P, 3, 3), tol (P,) their tolerance (folds: the pairs
+    """_test's test of pairs a, b (P, 3, 3), tol (P,) their tolerance (folds: the pairs
     that may face opposite ways)."""
     o, u, w, n = _frame(a)
     nb = np.cross(b[:, 1] - b[:, 0], b[:, 2] - b[:, 0])

@@ -144,3 +144,52 @@ def test_area_bound_of_all_sizes_at_once_is_each_sizes_own(seed):
         want_total, want_box = _one_size(c, rows, starts[perm][k], int(s))
         np.testing.assert_array_equal(total[k], want_total)
         np.testing.assert_array_equal(box[k], want_box)
+
+
+def _pairs_overlap_reference(a, b, folds):
+    """The pair-by-pair test _test ran before it took each triangle's box once: boxes and
+    tolerances from each pair's own gathered corners by numpy's reductions, then the in-plane
+    test on the pairs whose boxes come within twice the tolerance."""
+    big = np.maximum(np.abs(a).max(axis=(1, 2)), np.abs(b).max(axis=(1, 2)))
+    tol = of._PAIR_ULPS * np.spacing(np.maximum(big, 1e-30).astype(np.float32)).astype(np.float64)
+    lo_a, hi_a, lo_b, hi_b = a.min(axis=1), a.max(axis=1), b.min(axis=1), b.max(axis=1)
+    near = ((lo_b <= hi_a + 2 * tol[:, None]) & (lo_a <= hi_b + 2 * tol[:, None])).all(axis=1)
+    out = np.zeros(len(a), bool)
+    if near.any():
+        out[near] = of._overlap_in_plane(a[near], b[near], tol[near], folds[near])
+    return out
+
+
+@pytest.mark.parametrize("extra", [0, 4000])
+def test_pairs_tested_on_each_triangles_box_find_what_pairs_found(extra):
+    """_test with each triangle's box taken once marks the triangles the pair-by-pair test
+    marks: coplanar triangles in a few planes (overlaps, folds, quads), and with `extra`
+    triangles that are in no pair (the path for few pairs among many triangles)."""
+    rng = np.random.default_rng(3)
+    n = 300
+    v = (rng.uniform(-1, 1, (n, 1, 3)) + rng.uniform(-0.15, 0.15, (n, 3, 3))).astype(np.float32)
+    v[..., 2] = rng.integers(0, 3, (n, 1)) * 0.5              # three planes z = 0, 0.5, 1
+    v = v.reshape(-1, 3)
+    t = np.arange(3 * n, dtype=np.int32).reshape(n, 3)
+    # faces folded back over an edge they share by index (opposite winding, the third corner
+    # inside the first face): found; and neighbours across a shared edge (quads): left
+    inner = (v[t[:20]].mean(axis=1) + v[t[:20, 2]]) / 2
+    mirror = v[t[20:40, 0]] + v[t[20:40, 1]] - v[t[20:40, 2]]
+    v = np.concatenate([v, inner, mirror]).astype(np.float32)
+    k = np.arange(20)
+    t = np.concatenate([t, np.c_[t[k, 1], t[k, 0], 3 * n + k], np.c_[t[20 + k, 1], t[20 + k, 0], 3 * n + 20 + k]])
+    m = len(t)
+    v = np.concatenate([v, rng.uniform(5, 6, (3 * extra, 3)).astype(np.float32)])
+    t = np.concatenate([t, len(v) - 3 * extra + np.arange(3 * extra, dtype=np.int32).reshape(extra, 3)]).astype(np.int32)
+    geo, _ = dacrt.shading.triangle_table(v, t, 4.0, 1e-30)
+    c = of._Corners(v, t)
+    i, j = np.triu_indices(m, 1)
+    got = np.zeros(len(t), bool)
+    of._test(c, t, geo, i, j, got)
+    ok = ~of._quads(t, np.asarray(geo[9:12]), i, j)
+    i, j = i[ok], j[ok]
+    hit = _pairs_overlap_reference(c[i], c[j], of._folds(t, i, j))
+    want = np.zeros(len(t), bool)
+    want[i[hit]] = want[j[hit]] = True
+    assert 10 < want.sum() < m - 10 and want[300:320].all()
+    np.testing.assert_array_equal(got, want)
