@@ -224,7 +224,7 @@ def _sparse_pairs(c, t, rows, starts, sizes):
     # faces are its mesh's neighbours, whose folds the area bound and _folds are for; a plane of
     # one piece (a split floor, a fan of 1500 slivers all sharing the centre: ~500K pairs) costs
     # nothing here. Corners are keyed by (group, vertex): pieces never join across groups
-    corner = gid[:, None].astype(np.int64) * (int(t.max(initial=0)) + 1) + t[r]
+    corner = gid[:, None].astype(np.int64) * len(c.v) + t[r]
     verts, local = np.unique(corner, return_inverse=True)
     local = local.reshape(-1, 3).astype(np.int32)
     piece = dacrt.shading.island_roots(len(verts), np.r_[local[:, :2], local[:, 1:]])[local[:, 0]]
