@@ -394,10 +394,9 @@ def _overlap_in_plane(a, b, tol, folds):
     cos = np.einsum('pd,pd->p', n, nb)
     flat &= (cos >= _PARALLEL) | (folds & (cos <= -_PARALLEL))
     if not flat.all():      # (the rest for the pairs in one plane only; each pair's own numbers)
-        out = flat.copy()
-        if flat.any():
-            out[flat] = _overlap_in_plane(a[flat], b[flat], tol[flat], folds[flat])
-        return out
+        if not flat.any():
+            return flat
+        a, b, tol, o, u, w = a[flat], b[flat], tol[flat], o[flat], u[flat], w[flat]
     p = [np.stack([np.einsum('pkd,pd->pk', x - o[:, None], u), np.einsum('pkd,pd->pk', x - o[:, None], w)], axis=2)
          for x in (a, b)]
     axes = []
@@ -408,7 +407,8 @@ def _overlap_in_plane(a, b, tol, folds):
     axes = np.concatenate(axes, axis=1)                                  # (P, 6, 2)
     pa, pb = (np.einsum('pad,pkd->pak', axes, q) for q in p)             # (P, 6, 3)
     depth = np.minimum(_largest(pa, 2), _largest(pb, 2)) - np.maximum(_smallest(pa, 2), _smallest(pb, 2))
-    return flat & (depth > tol[:, None]).all(axis=1)
+    flat[flat] = (depth > tol[:, None]).all(axis=1)
+    return flat
 
 
 def overlapping_faces(sd, tri, mats) -> list:
