@@ -210,8 +210,8 @@ def _sparse_pairs(c, t, rows, starts, sizes):
     """The pairs (i, j) to test of the groups under the area bound (group k: rows[starts[k]:
     starts[k] + sizes[k]]): copies of a sparse shape laid over each other (a text's letters
     instanced on points in one plane leave most of the rectangle bounding them empty). Per group,
-    the pairs whose bounding boxes come within twice the group's largest pair tolerance on every
-    axis, found by sweeping along the axis the group spreads most (no pair matrix: a
+    the pairs whose bounding boxes come within twice the pair tolerance of the larger of their
+    two triangles' largest coordinates on every axis, found by sweeping along the axis the group spreads most (no pair matrix: a
     4000-triangle floor's ~6 neighbours each), nearest box centres first, at most _BUDGET pairs
     (beyond, a lower bound: still true). All groups in one set of numpy passes, each group's
     pairs as if it were swept alone."""
@@ -239,18 +239,23 @@ def _sparse_pairs(c, t, rows, starts, sizes):
         first = np.cumsum(sizes) - sizes
     tri = c[r]
     lo, hi = tri.min(axis=1), tri.max(axis=1)
-    big = np.maximum(np.maximum.reduceat(np.abs(tri).max(axis=(1, 2)), first), 1e-30)
-    margin = 2 * _PAIR_ULPS * np.spacing(big.astype(np.float32)).astype(np.float64)
+    # each triangle's margin, twice the pair tolerance of its own largest coordinate, a pair's
+    # the larger of its two: one of the whole group's had let a far face in the plane's offset
+    # bin set it (text laid over itself by the origin, a floor 1e6 away: a 2 m margin, every
+    # overlap of the letters left unsaid)
+    own = np.maximum(np.abs(tri).max(axis=(1, 2)), 1e-30)
+    margin = 2 * _PAIR_ULPS * np.spacing(own.astype(np.float32)).astype(np.float64)
     spread = np.argsort(np.maximum.reduceat(hi, first) - np.minimum.reduceat(lo, first), axis=1)[:, ::-1]
     ax = spread[:, 0]
     key = lo[np.arange(len(r)), ax[gid]]
     order = np.lexsort((key, gid))                                       # per group, stable by lo
     los = key[order]
     # for each triangle (in sweep order), the later ones of its group whose box starts before its
-    # own ends: searchsorted(los of the group, hi - margin, 'left'), for all groups in one sort
-    # (queries before equal boxes: those do not count)
+    # own ends (by its own margin: a pair's is not smaller, so none is missed; the depth test
+    # below takes the pair's): searchsorted(los of the group, hi - margin, 'left'), for all
+    # groups in one sort (queries before equal boxes: those do not count)
     og = gid[order]
-    query = hi[order, ax[og]] - margin[og]
+    query = hi[order, ax[og]] - margin[order]
     n = len(order)
     merged = np.lexsort((np.r_[np.ones(n, np.int8), np.zeros(n, np.int8)], np.r_[los, query], np.r_[og, og]))
     is_query = merged >= n
@@ -271,7 +276,7 @@ def _sparse_pairs(c, t, rows, starts, sizes):
     # (boxes only touching, as a grid's neighbours' do, leave at most an overlap too thin to
     # z-fight visibly: left, as everywhere here, rather than tested pair by pair)
     near = piece[a] != piece[b]
-    m = margin[pg]
+    m = np.maximum(margin[a], margin[b])
     for k in range(3):
         d = spread[pg, k]
         depth = np.minimum(hi[a, d], hi[b, d]) - np.maximum(lo[a, d], lo[b, d])

@@ -260,12 +260,8 @@ def test_ordinary_planes_of_more_than_512_triangles_are_not_said(scene, said):
     assert not [t for t in said if 'coincid' in t or 'overlap' in t], said
 
 
-def test_a_text_instanced_on_points_in_one_plane_is_said(scene, said):
-    """A flat text instanced on a grid's points without rotation and realized (the fuzzer's seeds
-    2602, 2618, 2627, 2640, 2649: pixels 1.3-1.7x Cycles, unsaid): the copies of its letters lie
-    over each other in one plane, though their areas add up to less than the rectangle bounding
-    them. Said, naming the instancing object; the text alone is not."""
-    _scene().hide_render = True
+def _instanced_text():
+    """A flat text 'Word' (hidden) instanced on three points of 'Scatter' at z = 1, realized."""
     text = bpy.data.objects.new('Word', bpy.data.curves.new('Word', 'FONT'))
     text.data.body = "Xo8"
     scenes.link(text)
@@ -284,7 +280,31 @@ def test_a_text_instanced_on_points_in_one_plane_is_said(scene, said):
     ng.links.new(iop.outputs[0], real.inputs[0])
     ng.links.new(real.outputs[0], go.inputs[0])
     grid.modifiers.new('scatter', 'NODES').node_group = ng
+    return text, grid
+
+
+def test_a_text_instanced_on_points_in_one_plane_is_said(scene, said):
+    """A flat text instanced on a grid's points without rotation and realized (the fuzzer's seeds
+    2602, 2618, 2627, 2640, 2649: pixels 1.3-1.7x Cycles, unsaid): the copies of its letters lie
+    over each other in one plane, though their areas add up to less than the rectangle bounding
+    them. Said, naming the instancing object; the text alone is not."""
+    _scene().hide_render = True
+    text, grid = _instanced_text()
     got = _said(said)
     assert len(got) == 1 and "'Scatter'" in got[0], got
     grid.hide_render, text.hide_render = True, False
     assert not _said(said), said
+
+
+def test_an_instanced_text_is_said_beside_a_far_face_in_its_plane(scene, said):
+    """The same text beside a floor 1e6 away in its plane (z = 1): the floor's faces fall in the
+    text's plane group, whose pair margin had been taken from the group's largest coordinate
+    (2 m at 1e6, deeper than the letters' overlaps), so nothing was said (fuzz 2898's text far
+    from the origin); each pair now takes its own, as the pair test does."""
+    _scene().hide_render = True
+    _instanced_text()
+    near = int(_said(said)[0].split(' triangles')[0])
+    scenes.plane('Far', size=10, location=(1e6, 0, 1.0), materials=[scenes.diffuse('far', (0.8, 0.8, 0.8))])
+    got = _said(said)
+    assert len(got) == 1 and "'Scatter'" in got[0] and "'Far'" not in got[0], got
+    assert int(got[0].split(' triangles')[0]) == near, got

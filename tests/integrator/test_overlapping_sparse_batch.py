@@ -13,7 +13,7 @@ from addon import overlappingfaces as of
 
 def _one_group(c, t, rows):
     """The pairs (global rows) one group under the area bound gets swept alone (the sweep as
-    overlappingfaces._sparse_group wrote it before the batching)."""
+    overlappingfaces._sparse_group wrote it before the batching, with each pair's own margin)."""
     verts, local = np.unique(t[rows], return_inverse=True)
     local = local.reshape(-1, 3).astype(np.int32)
     piece = dacrt.shading.island_roots(len(verts), np.r_[local[:, :2], local[:, 1:]])[local[:, 0]]
@@ -21,13 +21,13 @@ def _one_group(c, t, rows):
         return np.zeros(0, np.int64), np.zeros(0, np.int64)
     tri = c[rows]
     lo, hi = tri.min(axis=1), tri.max(axis=1)
-    big = max(float(np.abs(tri).max()), 1e-30)
-    margin = 2 * of._PAIR_ULPS * float(np.spacing(np.float32(big)))
+    margin = 2 * of._PAIR_ULPS * np.spacing(np.maximum(np.abs(tri).max(axis=(1, 2)), 1e-30).astype(np.float32))
+    margin = margin.astype(np.float64)
     spread = np.argsort(hi.max(axis=0) - lo.min(axis=0))[::-1]
     ax = int(spread[0])
     order = np.argsort(lo[:, ax], kind='stable')
     los = lo[order, ax]
-    end = np.searchsorted(los, hi[order, ax] - margin, side='left')
+    end = np.searchsorted(los, hi[order, ax] - margin[order], side='left')
     count = np.maximum(end - np.arange(len(order)) - 1, 0)
     if count.sum() > 8 * of._BUDGET:
         count = np.minimum(count, 8 * of._BUDGET // len(order))
@@ -35,9 +35,10 @@ def _one_group(c, t, rows):
     b = a + 1 + (np.arange(len(a)) - np.repeat(np.cumsum(count) - count, count))
     a, b = order[a], order[b]
     near = np.ones(len(a), bool)
+    pair = np.maximum(margin[a], margin[b])
     for k, d in enumerate(spread.tolist()):
         depth = np.minimum(hi[a, d], hi[b, d]) - np.maximum(lo[a, d], lo[b, d])
-        near &= depth > margin if k < 2 else depth >= -margin
+        near &= depth > pair if k < 2 else depth >= -pair
     near &= piece[a] != piece[b]
     a, b = a[near], b[near]
     if len(a) > of._BUDGET:
