@@ -18,7 +18,9 @@ Peak memory: the kernel's resident-set high-water mark (VmHWM) reset just before
 
 from __future__ import annotations
 
+import inspect
 import time
+import weakref
 from pathlib import Path
 
 NATIVE_SUMS = ("rays", "box_tests", "tri_tests", "partition_steps", "leaves", "seconds",
@@ -98,6 +100,13 @@ class Instrument:
 
         class Integrator(real_integrator):
             def __init__(self, *a, **k):
+                # the engine's cancel check held weakly: kept here until take(), the integrator
+                # would keep the render's engine alive past Blender freeing it, whose __del__
+                # then raised ReferenceError (the add-on holds it only during the render)
+                check = k.get('check_break')
+                if inspect.ismethod(check):
+                    ref = weakref.WeakMethod(check)
+                    k['check_break'] = lambda: bool(ref() and ref()())
                 super().__init__(*a, **k)
                 me.integrators.append(self)
 
