@@ -200,7 +200,6 @@ private:
         d["tri_tests"] = res.stats.tri_tests;
         d["partition_steps"] = res.stats.partition_steps;
         d["steals"] = res.stats.steals;
-        d["presplits"] = res.stats.presplits;
         d["median_steps"] = res.stats.median_steps;
         d["sah_steps"] = res.stats.sah_steps;
         d["leaves"] = res.stats.leaves;

@@ -23,7 +23,6 @@
 #include <exception>
 #include <mutex>
 #include <stdexcept>
-#include <thread>
 
 namespace dacrt {
 
@@ -211,17 +210,6 @@ static double store_in_top_order(TriangleSet& ts, TopCache& cache) {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
-// A test's stand-in for a slow cut of the batch into chunks (DACRT_TEST_ORDER_DELAY_US,
-// microseconds, slept before it): the other threads then split all they may of the shared top
-// (Tracer::presplit) before any ray reaches it.
-static long order_delay_us() {
-    static const long us = [] {
-        const char* e = std::getenv("DACRT_TEST_ORDER_DELAY_US");
-        return e ? std::max(0L, std::strtol(e, nullptr, 10)) : 0L;
-    }();
-    return us;
-}
-
 TraceResult trace(TriangleSet& ts, Ray* rays, size_t n, const TraceJob& job_in, int threads, Isa isa,
                   TopCache* cache) {
     TraceJob job = job_in;
@@ -302,6 +290,9 @@ TraceResult trace(TriangleSet& ts, Ray* rays, size_t n, const TraceJob& job_in, 
         std::vector<size_t> first_chunk{0};
         for (const Span& g : groups) first_chunk.push_back(first_chunk.back() + chunks_of(g.e - g.b));
         const size_t chunks = first_chunk.back();
+        bool spatial = false;  // some chunks were cut at origins
+        for (size_t g = 0; g < groups.size(); ++g)  // chunks of nearby origins (chunkorder.h)
+            spatial |= order_by_origin(rays + groups[g].b, groups[g].e - groups[g].b, first_chunk[g + 1] - first_chunk[g]);
         if (size_t(T) > chunks) T = int(chunks);
         res.threads = T;
 
@@ -325,24 +316,8 @@ TraceResult trace(TriangleSet& ts, Ray* rays, size_t n, const TraceJob& job_in, 
         // by index cost alike, and stealing between them cost camera rays 4% more CPU time and
         // 6.5% more wall time.
         StealBoard board;  // working: threads that have joined and not yet finished (see worker)
+        if (T > 1 && spatial) jb.steal = &board;
         TaskFn task_fn = isa == Isa::Avx512 ? avx512::trace_task : (isa == Isa::Avx2 ? avx2::trace_task : portable::trace_task);
-        PresplitFn presplit_fn = isa == Isa::Avx512 ? avx512::presplit : (isa == Isa::Avx2 ? avx2::presplit : portable::presplit);
-
-        // Chunks of nearby origins (chunkorder.h), cut by thread 0 (one serial sweep of the
-        // records per cut level: San Francisco's 1M rays ~1.5 ms) while the others split the
-        // shared top ahead of the rays (Tracer::presplit), which one thread had then done
-        // alone (its root: another ~2 ms of the 2-thread call) while the other waited.
-        std::atomic<bool> ordered{false};
-        bool spatial = false;  // some chunks were cut at origins: written before `ordered`
-        auto order_chunks = [&] {
-            if (const long us = order_delay_us()) std::this_thread::sleep_for(std::chrono::microseconds(us));
-            for (size_t g = 0; g < groups.size(); ++g)
-                spatial |= order_by_origin(rays + groups[g].b, groups[g].e - groups[g].b, first_chunk[g + 1] - first_chunk[g]);
-        };
-        if (T == 1) {
-            order_chunks();
-            ordered.store(true);
-        }
 
         std::atomic<size_t> next{0};
         std::vector<Stats> stats(T);
@@ -358,20 +333,6 @@ TraceResult trace(TriangleSet& ts, Ray* rays, size_t n, const TraceJob& job_in, 
                 std::lock_guard<std::mutex> g(board.m);
                 ++board.working;
             }
-            if (!ordered.load(std::memory_order_acquire)) {
-                try {
-                    if (w == 0) order_chunks();
-                    else presplit_fn(jb, float(n), ordered, stats[w]);
-                } catch (...) {  // out of memory: as below
-                    errors[w] = std::current_exception();
-                    next.store(chunks);
-                }
-                if (w == 0) ordered.store(true, std::memory_order_release);
-                // job 0 runs on the caller, which never waits for another index (parallel.h)
-                while (!ordered.load(std::memory_order_acquire)) std::this_thread::yield();
-            }
-            TraceJob jw = jb;
-            if (T > 1 && spatial) jw.steal = &board;
             try {
                 for (;;) {
                     const size_t c = next.fetch_add(1);
@@ -381,7 +342,7 @@ TraceResult trace(TriangleSet& ts, Ray* rays, size_t n, const TraceJob& job_in, 
                     while (c >= first_chunk[g + 1]) ++g;
                     const size_t m = groups[g].e - groups[g].b, k = c - first_chunk[g], cs = first_chunk[g + 1] - first_chunk[g];
                     const size_t b = groups[g].b + m * k / cs, e = groups[g].b + m * (k + 1) / cs;
-                    TraceJob jc = jw;
+                    TraceJob jc = jb;
                     jc.batch.origin_abs_max = groups[g].origin_abs_max;
                     jc.batch.far_origins = groups[g].far;
                     fn(jc, rays + b, e - b, ids.data(), stats[w]);
@@ -405,7 +366,7 @@ TraceResult trace(TriangleSet& ts, Ray* rays, size_t n, const TraceJob& job_in, 
                     lk.unlock();
                     try {
                         if (ids.size() < nt) ids.resize(nt);
-                        task_fn(jw, *t, ids.data(), stats[w]);
+                        task_fn(jb, *t, ids.data(), stats[w]);
                     } catch (...) {
                         if (!errors[w]) errors[w] = std::current_exception();
                     }

@@ -180,25 +180,19 @@ using ChunkFn = void (*)(const TraceJob&, Ray*, size_t, uint32_t*, Stats&);
 using TaskFn = void (*)(const TraceJob&, StolenTask&, uint32_t*, Stats&);
 // Whether every ray's fields are valid (validate.h); also what the trace needs to know of them.
 using FieldsFn = bool (*)(const Ray*, size_t, BatchInfo&);
-// Split the shared top's nodes that a batch of `rays` rays would split regardless of which rays
-// reach them, breadth-first from the root, until done (trace.h Tracer::presplit).
-using PresplitFn = void (*)(const TraceJob&, float, const std::atomic<bool>&, Stats&);
 namespace portable {
 void trace_chunk(const TraceJob&, Ray*, size_t, uint32_t*, Stats&);
 void trace_task(const TraceJob&, StolenTask&, uint32_t*, Stats&);
-void presplit(const TraceJob&, float, const std::atomic<bool>&, Stats&);
 bool fields_valid(const Ray*, size_t, BatchInfo&);
 }
 namespace avx2 {
 void trace_chunk(const TraceJob&, Ray*, size_t, uint32_t*, Stats&);
 void trace_task(const TraceJob&, StolenTask&, uint32_t*, Stats&);
-void presplit(const TraceJob&, float, const std::atomic<bool>&, Stats&);
 bool fields_valid(const Ray*, size_t, BatchInfo&);
 }
 namespace avx512 {
 void trace_chunk(const TraceJob&, Ray*, size_t, uint32_t*, Stats&);
 void trace_task(const TraceJob&, StolenTask&, uint32_t*, Stats&);
-void presplit(const TraceJob&, float, const std::atomic<bool>&, Stats&);
 bool fields_valid(const Ray*, size_t, BatchInfo&);
 }
 

@@ -27,10 +27,6 @@ void trace_task(const TraceJob& job, StolenTask& t, uint32_t* ids, Stats& st) {
     trace_task_w<16>(job, t, ids, st);
 }
 
-void presplit(const TraceJob& job, float rays, const std::atomic<bool>& done, Stats& st) {
-    presplit_w<16>(job, rays, done, st);
-}
-
 bool fields_valid(const Ray* rays, size_t n, BatchInfo& info) {
     return fields_valid_w<16>(rays, n, info);
 }

@@ -70,7 +70,6 @@ struct Stats {
     uint64_t double_fallbacks = 0;
     uint64_t max_depth = 0;
     uint64_t steals = 0;  // subtrees handed to an idle thread (work stealing, dispatch.cpp)
-    uint64_t presplits = 0;  // shared nodes split while the batch was cut into chunks (dispatch.cpp)
     // Per-phase time in phase_clock() ticks, summed over threads: read at node
     // granularity (3 clock reads per node), never per ray; subtrees of few rays are timed as a
     // whole and split between the phases by sampled nodes (Tracer::timing in trace.h).
@@ -82,7 +81,7 @@ struct Stats {
         tri_tests += o.tri_tests;
         partition_steps += o.partition_steps; median_steps += o.median_steps;
         sah_steps += o.sah_steps; leaves += o.leaves; double_fallbacks += o.double_fallbacks;
-        steals += o.steals; presplits += o.presplits;
+        steals += o.steals;
         filter_ticks += o.filter_ticks; partition_ticks += o.partition_ticks; leaf_ticks += o.leaf_ticks;
         if (o.max_depth > max_depth) max_depth = o.max_depth;
     }

@@ -379,49 +379,6 @@ struct Tracer {
         }
     }
 
-    // Splits shared nodes breadth-first from the root before any ray reaches them, until
-    // `done` (dispatch.cpp: the other threads do this while one cuts the batch into chunks at
-    // origins, which used to run first, alone). Only nodes whose split cannot depend on the
-    // rays that reach them: in adaptive mode a node of nt triangles is split by SAH only for
-    // more than sah_ratio * nt rays, so one that the whole batch (`rays`) could not tip over
-    // gets the median split any visit would make. A node a tracing thread holds is skipped.
-    // Returns the nodes split.
-    uint64_t presplit(const NodeBounds& root, size_t nt, float rays, const std::atomic<bool>& done) {
-        struct Item {
-            uint32_t* ids;
-            size_t nt;
-            NodeBounds nb;
-            uint64_t depth;
-            uint32_t h;
-        };
-        std::vector<Item> queue{Item{top->ids, nt, root, 0, 1}};
-        uint64_t made = 0;
-        for (size_t q = 0; q < queue.size() && !done.load(std::memory_order_acquire); ++q) {
-            const Item it = queue[q];
-            // as child() and shared_node() decide: a shared node that a visit would split
-            if (it.h == 0 || it.depth >= uint64_t(top->max_depth) || it.nt <= top->min_tris ||
-                it.nt <= size_t(cfg.leaf_size) || it.nt <= kPrivateFewRaysTris)
-                continue;
-            if (cfg.partition == Partition::Adaptive && rays > cfg.sah_ratio * float(it.nt)) continue;
-            SharedNode& sn = top->pool->at(it.h);
-            int expected = 0;
-            if (sn.state.compare_exchange_strong(expected, 1, std::memory_order_acq_rel)) {
-                const uint64_t c0 = phase_clock();
-                sn.k = uint32_t(split(it.ids, it.nt, it.nb, rays, it.depth, sn.L, sn.R, sn.axis, true));
-                sn.child = top->pool->alloc2();
-                sn.state.store(2, std::memory_order_release);
-                st.partition_ticks += phase_clock() - c0;
-                ++made;
-            } else if (expected != 2) {
-                continue;  // a tracing thread splits it (or copies its ids)
-            }
-            const uint32_t c = sn.child;
-            queue.push_back(Item{it.ids, sn.k, sn.L, it.depth + 1, c});
-            queue.push_back(Item{it.ids + sn.k, it.nt - sn.k, sn.R, it.depth + 1, c ? c + 1 : 0});
-        }
-        return made;
-    }
-
     // h: the node's pool index (0: no shared node, the pool was full; trace privately).
     void child(Ray* rays, size_t n, uint32_t* ids, size_t nt, const NodeBounds& nb, uint64_t depth, uint32_t h) {
         if (h != 0 && depth < uint64_t(top->max_depth) && nt > top->min_tris) {
@@ -433,15 +390,6 @@ struct Tracer {
     }
 };
 
-inline NodeBounds root_bounds(const TriangleSet& ts) {
-    NodeBounds root;
-    for (int a = 0; a < 3; ++a) {
-        root.lo[a] = ts.bounds.lo[a]; root.hi[a] = ts.bounds.hi[a];
-        root.clo[a] = ts.centroid_bounds.lo[a]; root.chi[a] = ts.centroid_bounds.hi[a];
-    }
-    return root;
-}
-
 template <int W, Query Q>
 void run_chunk(const TraceJob& job, Ray* rays, size_t n, uint32_t* ids, Stats& st) {
     const TriangleSet& ts = *job.ts;
@@ -449,19 +397,13 @@ void run_chunk(const TraceJob& job, Ray* rays, size_t n, uint32_t* ids, Stats& s
                     job.num_ids, job.cfg, job.batch.origin_abs_max,
                     job.batch.far_origins ? kPrecise : job.batch.odd_dirs ? kOdd : kFast,
                     job.top, ids, Stats{}, job.interrupt, job.steal, nullptr, rays, n};
-    tr.child(rays, n, job.top->ids, ts.valid_ids.size(), root_bounds(ts), 0, 1);
+    NodeBounds root;
+    for (int a = 0; a < 3; ++a) {
+        root.lo[a] = ts.bounds.lo[a]; root.hi[a] = ts.bounds.hi[a];
+        root.clo[a] = ts.centroid_bounds.lo[a]; root.chi[a] = ts.centroid_bounds.hi[a];
+    }
+    tr.child(rays, n, job.top->ids, ts.valid_ids.size(), root, 0, 1);
     tr.settle_timing();
-    st.add(tr.st);
-}
-
-// Tracer::presplit for a batch of `rays` rays (no rays traced: the hit outputs are unused).
-template <int W>
-void presplit_w(const TraceJob& job, float rays, const std::atomic<bool>& done, Stats& st) {
-    const TriangleSet& ts = *job.ts;
-    Tracer<W, Query::Closest> tr{ts.boxes.data(), ts.tris.data(), ts.prim.data(), nullptr, nullptr, nullptr, nullptr,
-                                 job.visible, 0, job.cfg, 0.0f, kFast, job.top, nullptr, Stats{}, nullptr, nullptr,
-                                 nullptr, nullptr, 0};
-    tr.st.presplits = tr.presplit(root_bounds(ts), ts.valid_ids.size(), rays, done);
     st.add(tr.st);
 }
 
