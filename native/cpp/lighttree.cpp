@@ -545,7 +545,7 @@ inline int LightTree::pick_of(const double p[4], double u, double& lo, double& w
 // std::upper_bound(a, a + n, t) - a for n >= 1 (the first i with t < a[i], else n; the same
 // index for every t, NaN too), without branches: which member a walk ends at is random, and
 // the search's mispredicted steps were ~8-10% of walk_rows' perf samples (README, manylights).
-// The window [base, base + len] always holds the answer; each step halves it by one compare
+// The window [base, base + n] always holds the answer; each step halves it by one compare
 // whose outcome moves base by an integer select (cmov).
 inline size_t upper_slot(const double* a, size_t n, double t) {
     size_t base = 0;
