@@ -395,8 +395,8 @@ class LightSetup:
                                              "all round (Soft Falloff on, or Multiple Importance off, match Cycles)"))
 
     def _say_lamps_ending_paths(self):
-        """Lamps rays can meet (an area light, a point or spot of some radius; MIS on or seen by
-        the camera) under a low Light Paths > Transparent. Cycles' shade_light counts each lamp a
+        """Lamps rays can meet (an area light, a point or spot of some radius; MIS on, whatever
+        its ray visibility, or seen by the camera) under a low Light Paths > Transparent. Cycles' shade_light counts each lamp a
         ray meets as a transparent bounce and ends the path once the count reaches the limit, so
         what lies behind that lamp (a surface, the world, the lamps past it) is not seen: at a
         limit of 0 or 1 the first lamp met ends it. DACRT's rays pass lamps freely (the lamp's
@@ -409,8 +409,11 @@ class LightSetup:
         path must meet lamps 8 times)."""
         limit = self.max_transparent
         lights = self.lights
-        met = [l for l in lights.lamps + lights.unsampled_lamps + lights.camera_lamps
-               if not l.at_infinity and not l.delta and (l.seen_by_bsdf or l.seen_by_camera)]
+        # Cycles' lights_intersect meets every lamp of MIS on with BSDF rays, hidden from them
+        # or not (integrate_light then finds no light there, but the pass still counts: a
+        # shadowless point of 1.5 m radius hidden from diffuse and camera rays in a grey world at
+        # Transparent 1, Cycles 3.3% darker than without it, DACRT the same; fuzz seed 44)
+        met = [l for l in lights.lit if not l.at_infinity and not l.delta and (l.use_mis or l.seen_by_camera)]
         if not met or len(met) < max(1, limit):
             return
         names = ', '.join(repr(n) for n in dict.fromkeys(l.name for l in met))

@@ -74,6 +74,7 @@ class LightSet:
         the shading point's object is not lit by. glass: camera rays may pass glass (then a lamp
         they see by its Transmission visibility alone is kept)."""
         lit = [l for l in lamps if not l.dark]
+        self.lit = lit                  # every lamp Cycles keeps, hidden from diffuse rays or not
         # emissive triangles light sampling never picks (Emission Sampling None): BSDF rays
         # still find them
         self.unsampled_emitters = unsampled_emitters
