@@ -106,7 +106,7 @@ class Instrument:
                 check = k.get('check_break')
                 if inspect.ismethod(check):
                     ref = weakref.WeakMethod(check)
-                    k['check_break'] = lambda: bool(ref() and ref()())
+                    k['check_break'] = lambda: bool((m := ref()) is not None and m())
                 super().__init__(*a, **k)
                 me.integrators.append(self)
 
