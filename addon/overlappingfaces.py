@@ -268,20 +268,31 @@ def _sparse_pairs(c, t, rows, starts, sizes):
     capped = total > 8 * _BUDGET
     if capped.any():
         count = np.where(capped[og], np.minimum(count, 8 * _BUDGET // sizes[og]), count)
-    a = np.repeat(np.arange(n), count)
-    b = a + 1 + (np.arange(len(a)) - np.repeat(np.cumsum(count) - count, count))
-    pg = og[a]
-    a, b = order[a], order[b]
-    # boxes overlapping deeper than the margin along the two axes the plane spreads along
-    # (boxes only touching, as a grid's neighbours' do, leave at most an overlap too thin to
-    # z-fight visibly: left, as everywhere here, rather than tested pair by pair)
-    near = piece[a] != piece[b]
-    m = np.maximum(margin[a], margin[b])
-    for k in range(3):
-        d = spread[pg, k]
-        depth = np.minimum(hi[a, d], hi[b, d]) - np.maximum(lo[a, d], lo[b, d])
-        near &= depth > m if k < 2 else depth >= -m
-    a, b, pg = a[near], b[near], pg[near]
+    # the candidate pairs made and box-tested a slice of sweep rows at a time, each slice's at
+    # most 8 _BUDGET (one group's cap: many capped groups at once had needed that many times
+    # the memory), bmw27's ~700 small groups in one slice
+    cum = np.cumsum(count)
+    keep_a, keep_b, keep_g = [], [], []
+    start = 0
+    while start < n:
+        stop = max(int(np.searchsorted(cum, (cum[start - 1] if start else 0) + 8 * _BUDGET, side='right')), start + 1)
+        cnt = count[start:stop]
+        a = np.repeat(np.arange(start, stop), cnt)
+        b = a + 1 + (np.arange(len(a)) - np.repeat(np.cumsum(cnt) - cnt, cnt))
+        pg = og[a]
+        a, b = order[a], order[b]
+        # boxes overlapping deeper than the margin along the two axes the plane spreads along
+        # (boxes only touching, as a grid's neighbours' do, leave at most an overlap too thin to
+        # z-fight visibly: left, as everywhere here, rather than tested pair by pair)
+        near = piece[a] != piece[b]
+        m = np.maximum(margin[a], margin[b])
+        for k in range(3):
+            d = spread[pg, k]
+            depth = np.minimum(hi[a, d], hi[b, d]) - np.maximum(lo[a, d], lo[b, d])
+            near &= depth > m if k < 2 else depth >= -m
+        keep_a.append(a[near]), keep_b.append(b[near]), keep_g.append(pg[near])
+        start = stop
+    a, b, pg = np.concatenate(keep_a), np.concatenate(keep_b), np.concatenate(keep_g)
     many = np.flatnonzero(np.bincount(pg, minlength=G) > _BUDGET)
     if len(many):
         mid = 0.5 * (lo + hi)
