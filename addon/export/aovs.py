@@ -12,6 +12,7 @@ import numpy as np
 from .. import nodeeval, nodegraph
 from ..nodegraph import aov_outputs
 from ..procedural import ProceduralTexels
+from ..texture import ImageTexels
 from . import procedurals
 from .closure import Texture
 from .images import MISSING_IMAGE
@@ -148,7 +149,7 @@ def _written(v):
     return f"{float(v[0]):.4g}" if len(v) == 1 else f"({', '.join(f'{float(x):.4g}' for x in v[:3])})"
 
 
-def shader_aovs(ntree, reasons, texture=None):
+def shader_aovs(ntree, reasons, texture=None, after_lookup=None):
     """ShaderAovs (aovs, textures, counts, varying) of a material's or world's AOV Output nodes.
     aovs: {AOV name: (colour (3,), value)}, the constant part of what they write (nodes of one
     name add up, as Cycles writes each). counts: {AOV name: how many nodes write it}, a COLOR
@@ -160,7 +161,9 @@ def shader_aovs(ntree, reasons, texture=None):
     constants). varying: {(name, kind): [(socket, colour, key)]}: inputs that read a value per
     object or per mesh corner (varying_key), which evaluate_varying computes on each object's
     or corner's. What cannot be computed is read as the input's own value (a second image of one
-    AOV as its average), noted in reasons with the AOV's name."""
+    AOV as its average), noted in reasons with the AOV's name. after_lookup(socket, image, colour):
+    the image looked up as Cycles stores it (an 8-bit sRGB one's bytes), its nodes run after the
+    blend, or None (texelbaking's _after_lookup)."""
     aovs, textures, counts, varying = {}, {}, {}, {}
     for node in aov_outputs(ntree):
         name = node.aov_name
@@ -236,6 +239,11 @@ def shader_aovs(ntree, reasons, texture=None):
             texels = np.empty(f.tex.pixels.shape[:2] + (4,), np.float32)
             texels[..., :3], texels[..., 3] = v if color else v[..., :1], 1.0
             src = f.tex
+            after = None if after_lookup is None else after_lookup(socket, src, color)
+            if after is not None:
+                # Cycles blends an 8-bit sRGB image's bytes, then decodes: its linear texels
+                # blended had written 1.05-1.07x Cycles' AOV (session-74 fuzz seed 3007)
+                texels = ImageTexels(texels, after)
             textures[name, kind] = Texture(('aov', src.key, id(texels)), texels, src.interpolation,
                                             src.extension, src.transform, src.udim)
             parts[kind] = np.zeros(3 if color else 1, np.float32)

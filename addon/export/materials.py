@@ -42,6 +42,7 @@ from .procedurals import PROCEDURAL_TYPES, TEXCOORD_UV
 from .shaders import DEFAULT_ALBEDO, PRINCIPLED_IGNORED, ShaderClosures, glass_roughness, nonnegative
 from .texelbaking import TexelBaking, channel_line
 from .texturedmixes import TexturedMixes
+from ..texture import stored_texels
 
 # what other modules read here (export/world.py, the benchmarks' fair materials), wherever it lives
 __all__ = ['DEFAULT_ALBEDO', 'DEFAULT_SURFACE_ALBEDO', 'IGNORED_OUTPUTS', 'MaterialBuilder', 'PRINCIPLED_IGNORED',
@@ -642,7 +643,9 @@ class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBak
                                                      reasons)
                 if emission.any():
                     reasons.append("emission under an image's alpha is not dimmed by it for light sampling")
-        aovs, aov_textures, aov_counts, aov_varying = shader_aovs(ntree, reasons, self._texture) \
+        aovs, aov_textures, aov_counts, aov_varying = shader_aovs(
+            ntree, reasons, self._texture,
+            lambda socket, src, color: self._after_lookup(socket, src, stored_texels(src.pixels), color)) \
             if ntree is not None and cycle is None else ({}, {}, {}, {})
         self._aov_varying = (mat, aov_varying) if aov_varying else None
         e_tex = e_interp = e_ext = e_xf = None
