@@ -465,7 +465,9 @@ def _used_outputs(ntree):
 def _folded_into(sock, folder, found, depth=0):
     """Adds to found the output_key(node, None) of the nodes whose values constant folding
     computed into the constant sock reads (a linked input Folder gives a _Const): the node
-    linked, and through its inputs that fold too, theirs (a chain of Math nodes of constants)."""
+    linked, and through the inputs its fold reads that fold too, theirs (a chain of Math nodes
+    of constants). A disabled input (a Mix Color's float A, linked before its data type
+    changed) is read by no fold: Cycles drops its link."""
     link, _ = source(sock)
     if link is None or depth > FOLD_DEPTH:
         return
@@ -474,9 +476,11 @@ def _folded_into(sock, folder, found, depth=0):
     if key in found:
         return
     found.add(key)
-    for i in range(len(node.inputs)):
-        s = node.inputs[i]
-        if not isinstance(folder.input_state(s), GraphLink):
+    kind = _fold_kind(node)
+    for i in _FOLD_INPUTS[kind](node) if kind in _FOLD_INPUTS else ():
+        s = input_by_id(node, i)
+        if s is not None and getattr(unwrap(s), 'enabled', True) and \
+                not isinstance(folder.input_state(s), GraphLink):
             _folded_into(s, folder, found, depth + 1)
 
 

@@ -101,3 +101,23 @@ def test_a_nan_in_a_mix_input_of_another_data_type_is_not_said(scene, said):
     next(s for s in mix.inputs if not s.enabled and s.type == 'VALUE' and s.name == 'A').default_value = NAN
     scenes.render_rgba(scene)
     assert "NaN" not in " | ".join(said)
+
+
+def test_a_nan_linked_into_a_mix_input_of_another_data_type_is_not_said(scene, said):
+    # (control: a Math of a NaN constant linked into a Mix's float A, the Mix then switched to
+    # Color: Blender keeps the link, hidden and invalid, and Cycles drops it; nothing reads the
+    # Math, and the fold's scan reads only the inputs the fold does)
+    wt = _world(scene, True)
+    mix = wt.nodes['WMX']
+    for s in mix.inputs:
+        if s.enabled and s.type == 'RGBA':
+            s.default_value = (0.5, 0.5, 0.5, 1.0)
+    math = wt.nodes.new('ShaderNodeMath')
+    math.inputs[0].default_value = NAN
+    mix.data_type = 'FLOAT'
+    wt.links.new(math.outputs[0], next(s for s in mix.inputs if s.enabled and s.name == 'A'))
+    mix.data_type = 'RGBA'
+    img = scenes.render_rgba(scene)
+    assert "NaN" not in " | ".join(said)
+    assert np.allclose(img[..., :3].mean(axis=(0, 1)), (0.5, 0.5, 0.5), atol=1e-6)
+
