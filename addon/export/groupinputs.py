@@ -78,8 +78,9 @@ def nan_inputs_by_kind(ntree):
     the nodes Cycles reads (nodegraph.compiled), split by whether the node reading them is one
     the node evaluation computes (nodeeval.node_inputs: a Math node's NaN is computed through
     it, as Cycles does, not read as 0) or one whose own value is read: a float read as 0, a
-    colour or vector with its NaN channel. For trees without the material's finer families (a
-    world's, a light's)."""
+    colour or vector with its NaN channel, of an Emission or Background node and of any other
+    (a texture's). For trees without the material's finer families (a world's, a light's):
+    (computed, floats, shader colours, other colours)."""
     from .. import nodeeval
     from ..nodegraph import compiled, used_outputs
     used = used_outputs(ntree)
@@ -90,18 +91,22 @@ def nan_inputs_by_kind(ntree):
     # node left unlinked had been said)
     nans = [g for g in grouped_inputs(ntree, used) if np.isnan(g.value).any()]
 
-    def found(c, colors):
-        return nodeeval.nan_inputs(ntree, keep=lambda n: rendered(n) and computes(n) == c, colors=colors) + \
-            [g.label for g in nans if computes(g.node) == c and (colors or g.is_float)]
+    def found(c, colors, also=lambda n: True):
+        return nodeeval.nan_inputs(ntree, keep=lambda n: rendered(n) and computes(n) == c and also(n),
+                                   colors=colors) + \
+            [g.label for g in nans if computes(g.node) == c and (colors or g.is_float) and also(g.node)]
     floats = found(False, False)
-    return found(True, True), floats, [b for b in found(False, True) if b not in floats]
+    colours = [b for b in found(False, True) if b not in floats]
+    shaders = found(False, True, lambda n: n.type in ('EMISSION', 'BACKGROUND'))
+    return found(True, True), floats, [b for b in colours if b in shaders], [b for b in colours if b not in shaders]
 
 
-def nan_said(ntree, colours="NaN read as 0 for {}"):
+def nan_said(ntree, colours="NaN read as 0 for {}", others="NaN read as 0 for {}"):
     """The texts naming ntree's NaN inputs by what they become (nan_inputs_by_kind), for a
     world's or a light's message: 'NaN read as 0 for ...', 'NaN computed through ...'; colours:
-    the text for a colour's NaN channel read at the node's own value."""
-    computed, floats, colour = nan_inputs_by_kind(ntree)
+    the text for a colour's NaN channel read at an Emission's or Background's own value,
+    others: at another node's (a texture's, read at its own value here)."""
+    computed, floats, colour, other = nan_inputs_by_kind(ntree)
     return [said.format(', '.join(bad)) for bad, said in
-            ((floats, "NaN read as 0 for {}"), (colour, colours),
+            ((floats, "NaN read as 0 for {}"), (colour, colours), (other, others),
              (computed, "NaN computed through the node as Cycles computes it for {}")) if bad]

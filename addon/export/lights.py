@@ -293,11 +293,15 @@ def _light_shader_factor(light, name, messages, approximated, lamp, profile=None
         return np.zeros(3), (f"its Light Output targets {' and '.join(targets)}, not Cycles" if targets
                              else "no Light Output in its node tree")
     reasons, dark = [], []
-    # (read as 0: a NaN Emission Strength gives no light, as in Cycles; a colour's NaN channel
-    # too, and one into a node is computed through it; a group's named where typed)
+    # (read as 0: a NaN Emission Strength gives no light, as in Cycles; one into a node is
+    # computed through it; a group's named where typed)
     # (a colour's NaN channel is not read as 0 here: the light's emission is not finite and the
-    # lamp is skipped, as Cycles emits nothing from it: (NaN, 0.5, 0.5) black, not cyan)
-    reasons += nan_said(light.node_tree, "NaN in a colour channel of {}: the light emits nothing, as in Cycles")
+    # lamp is skipped. An Emission Color's is as Cycles emits nothing from it: (NaN, 0.5, 0.5)
+    # black, not cyan; a texture's, read at its own value, is not: Cycles evaluates it at each
+    # point, a Checker's Color1 and Color2 of (NaN, 0.5, 0.5) emitting (0, 0.213, 0.213))
+    reasons += nan_said(light.node_tree, "NaN in a colour channel of {}: the light emits nothing, as in Cycles",
+                        "NaN in a channel of {}: the light emits nothing, where Cycles, evaluating the node "
+                        "at each point, may read the channel as 0 and emit")
     surface = out.inputs['Surface']
     if not surface.is_linked:
         dark.append("nothing linked into its Light Output's Surface")

@@ -121,3 +121,23 @@ def test_a_nan_linked_into_a_mix_input_of_another_data_type_is_not_said(scene, s
     assert "NaN" not in " | ".join(said)
     assert np.allclose(img[..., :3].mean(axis=(0, 1)), (0.5, 0.5, 0.5), atol=1e-6)
 
+
+def test_a_nan_colour_in_a_light_texture_is_not_said_to_match_cycles(scene, said):
+    # Cycles 5.0.1, 16 spp (measured, /tmp script of session 74): a point light whose Emission
+    # Color is a Checker of Color1 = Color2 = (NaN, 0.5, 0.5) emits (0, 0.213, 0.213), as
+    # (0, 0.5, 0.5) does: it evaluates the texture at each point, the NaN channel read as 0.
+    # DACRT reads the texture at its own value and skips the light: the message had said
+    # "the light emits nothing, as in Cycles"
+    mat, _, _, _ = scenes.small_view(scene, background=None)
+    scenes.plane("Plane", size=10, materials=(mat,))
+    lamp = scenes.light('POINT', 100, location=(0, 0, 2))
+    lamp.data.use_nodes = True
+    nt = lamp.data.node_tree
+    checker = nt.nodes.new('ShaderNodeTexChecker')
+    checker.inputs['Color1'].default_value = checker.inputs['Color2'].default_value = (NAN, 0.5, 0.5, 1.0)
+    nt.links.new(checker.outputs['Color'], next(n for n in nt.nodes if n.type == 'EMISSION').inputs['Color'])
+    scenes.render_rgba(scene)
+    text = " | ".join(said)
+    assert "NaN in a channel of 'Color1' of 'Checker Texture', 'Color2' of 'Checker Texture': the light " \
+        "emits nothing, where Cycles" in text, text
+    assert "as in Cycles" not in text.split("Checker Texture'")[-1].split(" | ")[0], text
