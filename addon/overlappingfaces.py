@@ -10,16 +10,18 @@ Cheap, and never claimed where it is not so: triangles are keyed by their quanti
 normal up to sign, offset in bins of _ULPS float32 ulps of the largest coordinate, plane_step;
 written by the table's own pass, dacrt.shading.triangle_table's plane_keys) and grouped natively
 where keys repeat, a quad's two triangles listed one after the other as one key
-(dacrt.shading.coplanar_groups: threaded passes over the keys). Groups of up to _SMALL are tested pair by pair; larger groups (up to _BIG) only
+(dacrt.shading.coplanar_groups: threaded passes over the keys). Groups of up to _SMALL are
+tested pair by pair; larger groups (up to _BIG) only
 where their triangles' areas, projected into the plane, add up to more than the area of a
 rectangle bounding them there, which must cover some point twice (the smallest of the rectangles
 along the edges of one triangle; a Mirror's faces mostly fill theirs), and above _MAX_GROUP only
 their pairs whose bounding boxes meet (a Screw of a flat profile about its normal: 1440 triangles
 in one plane, pixels 2.5-3.2x Cycles); groups under the bound, in their pairs of separate pieces
-whose boxes overlap (_sparse_pairs: a text instanced on points in one plane, pixels 1.3-1.7x). Every pair is tested exactly in the
-first one's plane: the other's corners within _PAIR_ULPS float32 ulps of the pair's own largest
-coordinate of it (surfaces further apart are met in one order by both tracers), and separating
-axes (the six edge normals), each overlap deeper than that. So faces overlapping within a plane
+whose boxes overlap (_sparse_pairs: a text instanced on points in one plane, pixels
+1.3-1.7x). Every pair is tested exactly in the first one's plane: the other's corners within
+_PAIR_ULPS float32 ulps of the pair's own largest coordinate of it (surfaces further apart are
+met in one order by both tracers), and separating axes (the six edge normals), each overlap
+deeper than that. So faces overlapping within a plane
 holding more than _BIG triangles (a face laid on a finely split floor), faces of one piece
 (joined by corners) in a plane their areas do not fill, nor a sliver thinner than the tolerance, nor twins
 whose plane offsets lie more than half a bin apart across a bin's edge (float32 normals of thin
@@ -156,8 +158,8 @@ def _test(c, t, geo, i, j, out):
     corners = c[tri]
     # (min and max over the short axes as chains of np.minimum / np.maximum: the same values,
     # numpy's reductions over an axis of 3 had been ~5x slower)
-    lo, hi = _smallest(corners, 1), _largest(corners, 1)
-    big = _largest(np.abs(corners).reshape(len(tri), 9), 1)
+    lo, hi = _chain(np.minimum, corners, 1), _chain(np.maximum, corners, 1)
+    big = _chain(np.maximum, np.abs(corners).reshape(len(tri), 9), 1)
     for k in range(0, len(i), _CHUNK):         # (a big group's pairs: bounded memory)
         a, b = i[k:k + _CHUNK], j[k:k + _CHUNK]
         tol = _PAIR_ULPS * np.spacing(np.maximum(np.maximum(big[a], big[b]), 1e-30).astype(np.float32)).astype(np.float64)
@@ -210,11 +212,12 @@ def _sparse_pairs(c, t, rows, starts, sizes):
     """The pairs (i, j) to test of the groups under the area bound (group k: rows[starts[k]:
     starts[k] + sizes[k]]): copies of a sparse shape laid over each other (a text's letters
     instanced on points in one plane leave most of the rectangle bounding them empty). Per group,
-    the pairs whose bounding boxes come within twice the pair tolerance of the larger of their
-    two triangles' largest coordinates on every axis, found by sweeping along the axis the group spreads most (no pair matrix: a
-    4000-triangle floor's ~6 neighbours each), nearest box centres first, at most _BUDGET pairs
-    (beyond, a lower bound: still true). All groups in one set of numpy passes, each group's
-    pairs as if it were swept alone."""
+    the pairs whose bounding boxes overlap deeper than a margin (twice the pair tolerance of
+    the larger of their two triangles' largest coordinates) along the two axes the group spreads
+    most, and come within it along the third, found by sweeping along the axis it spreads most
+    (no pair matrix: a 4000-triangle floor's ~6 neighbours each), nearest box centres first, at
+    most _BUDGET pairs (beyond, a lower bound: still true). All groups in one set of numpy
+    passes, each group's pairs as if it were swept alone."""
     G = len(starts)
     gid = np.repeat(np.arange(G), sizes)                                 # each row's group
     sel = np.repeat(starts - (np.cumsum(sizes) - sizes), sizes) + np.arange(int(sizes.sum()))
@@ -369,8 +372,8 @@ def _areas_and_box(c, rows, starts, sizes):
         o, u, w, n = _frame(f)
         rel = tri - o[gid][:, None, :]
         p = np.stack([np.einsum('tkd,td->tk', rel, u[gid]), np.einsum('tkd,td->tk', rel, w[gid])], axis=-1)
-        hi = np.maximum.reduceat(_largest(p, 1), first)
-        lo = np.minimum.reduceat(_smallest(p, 1), first)
+        hi = np.maximum.reduceat(_chain(np.maximum, p, 1), first)
+        lo = np.minimum.reduceat(_chain(np.minimum, p, 1), first)
         box = np.minimum(box, np.prod(hi - lo, axis=1))
     e1, e2 = p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]
     area = np.abs(e1[..., 0] * e2[..., 1] - e1[..., 1] * e2[..., 0])
@@ -381,22 +384,13 @@ def _areas_and_box(c, rows, starts, sizes):
     return total, box
 
 
-def _smallest(x, axis):
-    """x.min(axis) (the same values, NaN too) as a chain of np.minimum over the axis' slices:
-    numpy's reduction over a short axis is several times slower."""
+def _chain(ufunc, x, axis):
+    """ufunc.reduce(x, axis) (np.minimum: x.min(axis), the same values, NaN too) as a chain of
+    ufunc over the axis' slices: numpy's reduction over a short axis is several times slower."""
     x = np.moveaxis(x, axis, 0)
-    out = np.minimum(x[0], x[1])
+    out = ufunc(x[0], x[1])
     for k in range(2, len(x)):
-        np.minimum(out, x[k], out=out)
-    return out
-
-
-def _largest(x, axis):
-    """x.max(axis), as _smallest."""
-    x = np.moveaxis(x, axis, 0)
-    out = np.maximum(x[0], x[1])
-    for k in range(2, len(x)):
-        np.maximum(out, x[k], out=out)
+        ufunc(out, x[k], out=out)
     return out
 
 
@@ -422,7 +416,8 @@ def _overlap_in_plane(a, b, tol, folds):
         axes.append(ax / np.maximum(np.linalg.norm(ax, axis=-1, keepdims=True), 1e-300))
     axes = np.concatenate(axes, axis=1)                                  # (P, 6, 2)
     pa, pb = (np.einsum('pad,pkd->pak', axes, q) for q in p)             # (P, 6, 3)
-    depth = np.minimum(_largest(pa, 2), _largest(pb, 2)) - np.maximum(_smallest(pa, 2), _smallest(pb, 2))
+    depth = np.minimum(_chain(np.maximum, pa, 2), _chain(np.maximum, pb, 2)) - \
+        np.maximum(_chain(np.minimum, pa, 2), _chain(np.minimum, pb, 2))
     flat[flat] = (depth > tol[:, None]).all(axis=1)
     return flat
 
