@@ -692,7 +692,9 @@ def nan_inputs(ntree, types=None, keep=None, colors=False):
     """'input' of 'node' for each unlinked float input of ntree's nodes whose value is NaN
     (a script's or driver's), which constant_value reads as 0; types: only nodes of those
     types (a set of node.type), or None for all; keep: only nodes it returns true for;
-    colors: also colour and vector inputs with a NaN among their first three components."""
+    colors: also colour and vector inputs with a NaN among their first three components, those
+    showing their value (a texture's hidden Vector is its coordinates, not the value). Disabled
+    inputs (a Mix's of its other data types) are read by nothing and skipped."""
     found = []
     for node in getattr(ntree, 'nodes', ()):
         if (types is not None and node.type not in types) or (keep is not None and not keep(node)):

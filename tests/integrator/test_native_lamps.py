@@ -560,9 +560,9 @@ def test_bad_arguments():
 
 def test_lamp_gather_checks_pids_at_every_place_and_length():
     """The gathers' pid check (one pass for ascending pids within range, else the full check)
-    refuses a repeat, a step down, a negative or an out-of-range pid wherever it sits in arrays
-    of every length around the vector widths, and takes ascending pids with gaps: the world
-    is then added to exactly their columns."""
+    refuses a repeat, a negative or an out-of-range pid wherever it sits in arrays of every
+    length around the vector widths, takes a step down (distinct and in range: the full check)
+    and ascending pids with gaps: the world is then added to exactly their columns."""
     rng = np.random.default_rng(11)
     rec = lamp_records([make('background')])
     gather = dacrt.lamps.lamp_gather
