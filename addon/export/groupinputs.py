@@ -1,5 +1,6 @@
-"""The constant inputs of the nodes Cycles compiles inside a material's node groups, for the
-bad-value messages (a NaN, float32's largest) that otherwise see only the tree's top level.
+"""The constant inputs of the nodes Cycles compiles inside a node tree's groups (a material's,
+a world's, a light's), for the bad-value messages (a NaN, float32's largest) that otherwise see
+only the tree's top level.
 
 An input inside a group takes its value from the socket itself when unlinked, or, when linked
 to the Group Input, from the Group node's input outside (nested groups followed outward, as
@@ -71,42 +72,3 @@ def grouped_inputs(ntree, used):
                                       getattr(unwrap(sock), 'type', None) == 'VALUE'))
     return found
 
-
-def nan_inputs_by_kind(ntree):
-    """(computed, floats read as 0, colours read): the 'input' of 'node' labels of ntree's NaN
-    inputs (float, colour and vector: a NaN channel), its groups' included (grouped_inputs), of
-    the nodes Cycles reads (nodegraph.compiled), split by whether the node reading them is one
-    the node evaluation computes (nodeeval.node_inputs: a Math node's NaN is computed through
-    it, as Cycles does, not read as 0) or one whose own value is read: a float read as 0, a
-    colour or vector with its NaN channel, of an Emission or Background node and of any other
-    (a texture's). For trees without the material's finer families (a world's, a light's):
-    (computed, floats, shader colours, other colours)."""
-    from .. import nodeeval
-    from ..nodegraph import compiled, used_outputs
-    used = used_outputs(ntree)
-    rendered = compiled(ntree, used)
-    computes = lambda n: nodeeval.node_inputs(n) is not None     # noqa: E731
-    # (a NaN colour too: a world's Background Color of (NaN, 0.5, 0.5), or one into a Mix,
-    # had been rendered without naming the socket; and only nodes Cycles reads: a NaN in a
-    # node left unlinked had been said)
-    nans = [g for g in grouped_inputs(ntree, used) if np.isnan(g.value).any()]
-
-    def found(c, colors, also=lambda n: True):
-        return nodeeval.nan_inputs(ntree, keep=lambda n: rendered(n) and computes(n) == c and also(n),
-                                   colors=colors) + \
-            [g.label for g in nans if computes(g.node) == c and (colors or g.is_float) and also(g.node)]
-    floats = found(False, False)
-    colours = [b for b in found(False, True) if b not in floats]
-    shaders = found(False, True, lambda n: n.type in ('EMISSION', 'BACKGROUND'))
-    return found(True, True), floats, [b for b in colours if b in shaders], [b for b in colours if b not in shaders]
-
-
-def nan_said(ntree, colours="NaN read as 0 for {}", others="NaN read as 0 for {}"):
-    """The texts naming ntree's NaN inputs by what they become (nan_inputs_by_kind), for a
-    world's or a light's message: 'NaN read as 0 for ...', 'NaN computed through ...'; colours:
-    the text for a colour's NaN channel read at an Emission's or Background's own value,
-    others: at another node's (a texture's, read at its own value here)."""
-    computed, floats, colour, other = nan_inputs_by_kind(ntree)
-    return [said.format(', '.join(bad)) for bad, said in
-            ((floats, "NaN read as 0 for {}"), (colour, colours), (other, others),
-             (computed, "NaN computed through the node as Cycles computes it for {}")) if bad]

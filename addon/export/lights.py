@@ -12,7 +12,7 @@ from ..nodeeval import constant_value
 from ..nodegraph import input_socket, linked_link, output_node
 from .lampcoordinates import (PROCEDURAL_TEXTURES, at_lamp_coordinates, coordinate_value, lamp_coordinates,
                               texture_profile)
-from .groupinputs import nan_said
+from .nanmessages import nan_said
 from .objectinfo import OBJECT_INFO_OUTPUTS, object_value
 from .shadersockets import mix_factor, value_emission
 

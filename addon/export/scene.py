@@ -18,7 +18,7 @@ from . import budget
 from .assembly import Assembly
 from .camera import export_camera
 from .errors import ExportCancelled, ExportError
-from .groupinputs import nan_said
+from .nanmessages import nan_said
 from .images import ImageReading, texture_limit
 from .instanceattrs import InstanceAttributes
 from .lights import export_light, light_link_receivers
