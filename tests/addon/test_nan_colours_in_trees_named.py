@@ -91,13 +91,19 @@ def test_a_nan_in_a_world_node_nothing_reads_is_not_said(scene, said):
     assert "NaN" not in " | ".join(said)
 
 
-def test_a_nan_in_a_mix_input_of_another_data_type_is_not_said(scene, said):
-    # (control, and a false message before: a Mix Color's float A, disabled, is read by nothing)
+def _grey_mix_world(scene):
+    """The world of _world's Mix Color 'WMX' of grey constants: (its tree, the Mix)."""
     wt = _world(scene, True)
     mix = wt.nodes['WMX']
     for s in mix.inputs:
         if s.enabled and s.type == 'RGBA':
             s.default_value = (0.5, 0.5, 0.5, 1.0)
+    return wt, mix
+
+
+def test_a_nan_in_a_mix_input_of_another_data_type_is_not_said(scene, said):
+    # (control, and a false message before: a Mix Color's float A, disabled, is read by nothing)
+    wt, mix = _grey_mix_world(scene)
     next(s for s in mix.inputs if not s.enabled and s.type == 'VALUE' and s.name == 'A').default_value = NAN
     scenes.render_rgba(scene)
     assert "NaN" not in " | ".join(said)
@@ -107,11 +113,7 @@ def test_a_nan_linked_into_a_mix_input_of_another_data_type_is_not_said(scene, s
     # (control: a Math of a NaN constant linked into a Mix's float A, the Mix then switched to
     # Color: Blender keeps the link, hidden and invalid, and Cycles drops it; nothing reads the
     # Math, and the fold's scan reads only the inputs the fold does)
-    wt = _world(scene, True)
-    mix = wt.nodes['WMX']
-    for s in mix.inputs:
-        if s.enabled and s.type == 'RGBA':
-            s.default_value = (0.5, 0.5, 0.5, 1.0)
+    wt, mix = _grey_mix_world(scene)
     math = wt.nodes.new('ShaderNodeMath')
     math.inputs[0].default_value = NAN
     mix.data_type = 'FLOAT'
