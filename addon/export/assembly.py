@@ -12,6 +12,7 @@ from .. import scenedata as sd
 from ..procedural import ATTRIBUTE_NEED, ProceduralTexels
 from .aovs import GEOMETRY_POSITION
 from .attributemaps import marked_label
+from .meshes import unread_alpha, unread_reads
 from .bump import needs_object_maps
 from .errors import ExportCancelled
 from .objectinfo import OBJECT_INFO
@@ -94,11 +95,12 @@ def _put(block, ids, rows, values):
         block[ids[:, None], rows[None, :]] = values
 
 
-def _unread_rows(nt):
-    """(nt, 3, 4) float32: what Cycles' Attribute node reads of an attribute it does not find
-    (svm_node_attr): colour and Fac 0, Alpha 1."""
+def _unread_rows(nt, key):
+    """(nt, 3, 4) float32: what the node reading under key reads of an attribute the mesh lacks,
+    as Cycles: colour and Fac 0, Alpha 1 of an Attribute node (svm_node_attr), 0 of a Color
+    Attribute node (svm_node_vertex_color; meshes.unread_alpha)."""
     rows = np.zeros((nt, 3, 4), np.float32)
-    rows[..., 3] = 1.0
+    rows[..., 3] = unread_alpha(key)
     return rows
 
 
@@ -649,8 +651,8 @@ class Assembly:
             name = entry[2]
             values = a.corner_attribute(name)
             if values is None:
-                self.ignore(a.unread_said(name, "an AOV reading it reads colour 0 and alpha 1"), object_name)
-                values = _unread_rows(len(a.triangles))
+                self.ignore(a.unread_said(name, unread_reads(name, "an AOV reading it")), object_name)
+                values = _unread_rows(len(a.triangles), name)
             cache[k, id(a), id(entry)] = self.materials.evaluated_aov(entry, values.reshape(-1, 4)).reshape(
                 len(a.triangles), 3, -1)
         return cache[k, id(a), id(entry)]
@@ -983,10 +985,10 @@ class Assembly:
                 continue
             v = a.corner_attribute(n)
             if v is None:
-                said = a.unread_said(n, "it reads colour 0 and alpha 1")
+                said = a.unread_said(n, unread_reads(n))
                 for name in placed:
                     self.ignore(said, name)
-                v = _unread_rows(len(a.triangles))
+                v = _unread_rows(len(a.triangles), n)
             values[n] = np.ascontiguousarray(v, np.float32).reshape(-1, 4)
         return values
 
@@ -1104,8 +1106,8 @@ class Assembly:
                 name = need[len(ATTRIBUTE_NEED):]
                 values = a.corner_attribute(name)
                 if values is None:
-                    self.ignore(a.unread_said(name, "it reads colour 0 and alpha 1"), place.name)
-                    block = _unread_rows(len(rows))
+                    self.ignore(a.unread_said(name, unread_reads(name)), place.name)
+                    block = _unread_rows(len(rows), name)
                 else:
                     block = values[rows]
                     bad = ~np.isfinite(block).all(axis=(1, 2))

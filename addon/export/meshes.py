@@ -580,6 +580,8 @@ class MeshArrays:
         a type attribute_rows does not read, or on no domain of a mesh: unread_attribute says which)."""
         if name in self._attributes:
             return self._attributes[name]
+        if name.startswith(COLOR_OF):           # a Color Attribute node's: the layer's values
+            return self.corner_attribute(name[len(COLOR_OF):])
         out = None
         me = self.mesh
         fac = name.startswith(FAC_OF)           # an Attribute node's Fac of it (FAC_OF)
@@ -670,7 +672,7 @@ class MeshArrays:
         """Why corner_attribute(name) is None, as a Blender user would say it: 'no attribute 'n'
         on the mesh', or the attribute there and why Cycles does not read it either (its type,
         or its domain); a standard attribute's (STANDARD_OF) what Cycles reads instead."""
-        name = name.removeprefix(FAC_OF)
+        name = name.removeprefix(FAC_OF).removeprefix(COLOR_OF)
         if name.startswith(COLOR_STANDARD_OF):
             name = name[len(COLOR_STANDARD_OF):]
             if self.mesh is not None or self.strand is None:
@@ -873,14 +875,32 @@ def attribute_key(name, fac=False):
 COLOR_STANDARD_OF = '\x00Color Attribute standard\x00'
 
 
+# a Color Attribute node reads a layer the mesh lacks as colour 0 and alpha 0 (Cycles'
+# svm_node_vertex_color), an Attribute node as colour 0 and alpha 1 (svm_node_attr; measured in
+# Cycles 5.0.1 through an AOV, an Emission colour and a Mix Shader factor): its key is marked so
+# (the layer's values are the name's, one read for both nodes: corner_attribute)
+COLOR_OF = '\x00Color Attribute\x00'
+
+
 def color_attribute_key(name):
     """The name a Color Attribute node naming `name` reads under (corner_attribute)."""
-    return COLOR_STANDARD_OF + name if name in STANDARD_NAMES else name
+    return COLOR_STANDARD_OF + name if name in STANDARD_NAMES else COLOR_OF + name
+
+
+def unread_alpha(key):
+    """The alpha the node reading under key (attribute_key or color_attribute_key) gives where
+    the mesh has no such attribute, as Cycles: a Color Attribute node's 0, an Attribute node's 1."""
+    return 0.0 if key.startswith((COLOR_OF, COLOR_STANDARD_OF)) else 1.0
+
+
+def unread_reads(key, what="it"):
+    """What a message says the node reading under key reads where the mesh lacks the attribute."""
+    return f"{what} reads colour 0 and alpha {unread_alpha(key):g}"
 
 
 def attribute_label(key):
     """The attribute a key of attribute_key or color_attribute_key names, as a message says it."""
-    name = key.removeprefix(FAC_OF).removeprefix(COLOR_STANDARD_OF)
+    name = key.removeprefix(FAC_OF).removeprefix(COLOR_STANDARD_OF).removeprefix(COLOR_OF)
     if name.startswith(STANDARD_OF):
         std = name[len(STANDARD_OF):]
         return f"the {std[1:]} output" if std in STANDARD_INFO else f"Cycles' standard attribute '{std}'"
