@@ -1,9 +1,10 @@
 """A Color Attribute or Attribute node naming a layer the mesh lacks, read through an AOV, an
-Emission colour, a Mix Shader factor and a Diffuse BSDF's colour, against Cycles 5.0.1: every Color, Vector and Fac
-reads 0, an Attribute node's Alpha 1 (svm_node_attr) and a Color Attribute node's Alpha 0
-(svm_node_vertex_color). DACRT had read both nodes' Alpha as 1 (one key for both: an AOV of a
-Color Attribute's Alpha 1 where Cycles' is 0, fuzz seed 3013; its Emission white, its Mix all
-the second shader, its Diffuse lit 0.945 where Cycles' is black). Each node kind and output on its own plane, one row per reader."""
+Emission colour, a Mix Shader factor and a Diffuse BSDF's colour, against Cycles 5.0.1: every
+Color, Vector and Fac reads 0, an Attribute node's Alpha 1 (svm_node_attr) and a Color
+Attribute node's Alpha 0 (svm_node_vertex_color). DACRT had read both nodes' Alpha as 1 (one
+key for both: an AOV of a Color Attribute's Alpha 1 where Cycles' is 0, fuzz seed 3013; its
+Emission white, its Mix all the second shader, its Diffuse lit 0.945 where Cycles' is black).
+Each node kind and output on its own plane, one row per reader."""
 import bpy
 import numpy as np
 import pytest
