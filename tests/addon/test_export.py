@@ -12,6 +12,7 @@ from mathutils import Euler, Vector
 from addon import export, hair, pointcloud, specular
 from addon import lights as ls
 from addon import scenedata as sd
+from addon.export.meshes import color_attribute_key
 from addon.procedural import ProceduralTexels
 from addon.texture import srgb_to_linear, stored_texels
 
@@ -2802,7 +2803,7 @@ def test_a_tint_of_byte_corner_colours_is_applied_per_point(scene, exported):
     attr = ob.data.color_attributes.new('Col', 'BYTE_COLOR', 'CORNER')
     attr.data.foreach_set('color', np.random.default_rng(5).random(len(attr.data) * 4).astype(np.float32))
     m = {m.name: m for m in exported().materials}["MTint"]
-    assert m.color_attribute == 'Col' and m.approximated == '', m.approximated
+    assert m.color_attribute == color_attribute_key('Col') and m.approximated == '', m.approximated
 
 
 def test_curves_attributes_are_read_per_point_and_per_curve(scene, exported):
@@ -2900,7 +2901,7 @@ def test_colour_attributes_per_corner(scene, exported):
     tint = np.array([0.5, 1.0, 2.0])
     for domain, values in made.items():
         m = table[f"M{domain}"]
-        assert m.color_attribute == 'Col' and m.texture is None and m.approximated == '', m.approximated
+        assert m.color_attribute == color_attribute_key('Col') and m.texture is None and m.approximated == '', m.approximated
         assert np.allclose(m.base_color, 1.0)
         tris = np.asarray(data.geometry.triangles)[of_object(data, domain)]
         colors = g.colors[of_object(data, domain)]
@@ -3173,7 +3174,7 @@ def test_image_times_colour_attribute_either_way(scene, exported, tmp_path):
     table = {m.name: m for m in data.materials}
     for i in range(2):
         m = table[f"Order{i}"]
-        assert m.approximated == '' and m.color_attribute == 'Col' and stored_texels(m.texture) is not None
+        assert m.approximated == '' and m.color_attribute == color_attribute_key('Col') and stored_texels(m.texture) is not None
         assert np.allclose(m.base_color, 1.0)
         assert np.allclose(data.geometry.colors[of_object(data, f"Order{i}")], (0.25, 1.0, 0.5), atol=1e-6)
 
