@@ -60,16 +60,16 @@ __attribute__((always_inline)) inline void gather_add(const Gather& g, const flo
     for (int a = 0; a < 3; ++a) out[size_t(a) * g.N] += v[a];
 }
 
-// Adds what ray i sees of the lamp at list position k (kind and tree key hoisted by the
-// caller); nothing where it does not see the lamp.
-__attribute__((always_inline)) inline void gather_one(const Gather& g, const LampRecord& lamp, int kind, int32_t key,
+// Adds what ray i sees of the lamp at list position k (at_infinity(lamp) and tree key hoisted
+// by the caller); nothing where it does not see the lamp.
+__attribute__((always_inline)) inline void gather_one(const Gather& g, const LampRecord& lamp, bool infinite, int32_t key,
                                                       size_t k, size_t i) {
     const size_t n = g.n;
     const float o[3] = {g.O[i], g.O[n + i], g.O[2 * n + i]};
     const float d[3] = {g.D[i], g.D[n + i], g.D[2 * n + i]};
     float Le[3] = {0.0f, 0.0f, 0.0f}, pdf_l = 0.0f;
-    const bool seen = kind == LAMP_SUN || kind == LAMP_BACKGROUND ? g.miss[i] && miss_lamp(lamp, d, Le, pdf_l)
-                                                                  : hit_lamp(lamp, o, d, g.t_surf[i * g.t_step], Le, pdf_l);
+    const bool seen = infinite ? g.miss[i] && miss_lamp(lamp, d, Le, pdf_l)
+                               : hit_lamp(lamp, o, d, g.t_surf[i * g.t_step], Le, pdf_l);
     // most rays see none of the lamps they are tested against (a sun's disk, a small lamp the
     // boxes or BVH list as near): they add nothing and are done, without the weight, the clamp and the
     // film's three read-modify-writes (many lights: 16.6 -> 14.9 ms of lamp_gather per render)

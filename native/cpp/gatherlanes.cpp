@@ -104,7 +104,7 @@ void gather_area_lanes(const Gather& g, const LampRecord& lamp, int32_t key, siz
             }
         add_lanes(g, lamp, key, k, i0, hit, pdf);
     }
-    for (size_t i = i0; i < e; ++i) gather_one(g, lamp, LAMP_AREA, key, k, i);
+    for (size_t i = i0; i < e; ++i) gather_one(g, lamp, false, key, k, i);  // (an area lamp: finite)
 }
 
 }  // namespace dacrt

@@ -74,12 +74,6 @@ inline int32_t tree_key(const Gather& g, size_t k) {  // the lamp's key in the l
     return g.tree && g.lamp_key ? g.lamp_key[g.lamps[k]] : -1;
 }
 
-// Whether a lamp is at infinity (a sun or the background): rays that missed everything see it.
-inline bool at_infinity(const LampRecord& lamp) {
-    const int kind = int(lamp.kind);
-    return kind == LAMP_SUN || kind == LAMP_BACKGROUND;
-}
-
 // gather_one of a lamp at infinity (list position k) over rays [b, e), the rays that see it
 // listed first, 64 at a time and without a branch per ray (which rays missed follows no
 // pattern: ray by ray, the test mispredicted as environment_gather's had), then added in
@@ -119,13 +113,13 @@ void gather_range_infinite(Gather g, size_t b, size_t e) {
 void gather_range(Gather g, size_t b, size_t e) {
     for (size_t k = 0; k < g.nl; ++k) {
         const LampRecord& lamp = g.rec[g.lamps[k]];
-        const int kind = int(lamp.kind);
+        const bool infinite = at_infinity(lamp);
         const int32_t key = tree_key(g, k);
         if (area_lanes_apply(lamp)) {
             gather_area_lanes(g, lamp, key, k, b, e);
             continue;
         }
-        for (size_t i = b; i < e; ++i) gather_one(g, lamp, kind, key, k, i);
+        for (size_t i = b; i < e; ++i) gather_one(g, lamp, infinite, key, k, i);
     }
 }
 
@@ -146,7 +140,7 @@ void gather_range_boxes(Gather g, const LampBoxes& boxes, uint64_t infinity, siz
             for (uint64_t c = cand[q] | (g.miss[i] ? infinity : 0); c; c &= c - 1) {
                 const size_t k = size_t(__builtin_ctzll(c));
                 const LampRecord& lamp = g.rec[g.lamps[k]];
-                gather_one(g, lamp, int(lamp.kind), tree_key(g, k), k, i);
+                gather_one(g, lamp, at_infinity(lamp), tree_key(g, k), k, i);
             }
         }
     }
@@ -156,18 +150,18 @@ void gather_range_boxes(Gather g, const LampBoxes& boxes, uint64_t infinity, siz
 // same additions in the same order as gather_range, without the lamps a ray passes far from
 // (a delta lamp is never seen: the linear loop adds 0 for it). For lists of more than 64 lamps
 // (shorter ones: gather_range_boxes), the candidates a list sorted per ray.
-void gather_range_bvh(Gather g, const LampBVH& bvh, const std::vector<int32_t>& at_infinity, size_t b, size_t e) {
+void gather_range_bvh(Gather g, const LampBVH& bvh, const std::vector<int32_t>& infinite, size_t b, size_t e) {
     std::vector<int32_t> cand;
     for (size_t i = b; i < e; ++i) {
         cand.clear();
         const float o[3] = {g.O[i], g.O[g.n + i], g.O[2 * g.n + i]};
         const float d[3] = {g.D[i], g.D[g.n + i], g.D[2 * g.n + i]};
         bvh.visit(o, d, g.t_surf[i * g.t_step], cand);
-        if (g.miss[i]) cand.insert(cand.end(), at_infinity.begin(), at_infinity.end());
+        if (g.miss[i]) cand.insert(cand.end(), infinite.begin(), infinite.end());
         std::sort(cand.begin(), cand.end());
         for (int32_t k : cand) {
             const LampRecord& lamp = g.rec[g.lamps[k]];
-            gather_one(g, lamp, int(lamp.kind), tree_key(g, size_t(k)), size_t(k), i);
+            gather_one(g, lamp, at_infinity(lamp), tree_key(g, size_t(k)), size_t(k), i);
         }
     }
 }
@@ -195,20 +189,18 @@ void lamp_gather(const LampRecord* rec, const int32_t* lamps, size_t nl, const f
         parallel_for(n, [&](size_t b, size_t e) { gather_range(g, b, e); });
         return;
     }
-    std::vector<int32_t> at_infinity;  // the sun and background among the lamps, in list order
-    for (size_t k = 0; k < nl; ++k) {
-        const int kind = int(rec[lamps[k]].kind);
-        if (kind == LAMP_SUN || kind == LAMP_BACKGROUND) at_infinity.push_back(int32_t(k));
-    }
+    std::vector<int32_t> infinite;  // the sun and background among the lamps, in list order
+    for (size_t k = 0; k < nl; ++k)
+        if (at_infinity(rec[lamps[k]])) infinite.push_back(int32_t(k));
     if (nl <= LampBoxes::kMaxLamps) {
         const LampBoxes boxes(rec, lamps, nl);
         uint64_t infinity = 0;
-        for (int32_t k : at_infinity) infinity |= uint64_t(1) << k;
+        for (int32_t k : infinite) infinity |= uint64_t(1) << k;
         parallel_for(n, [&](size_t b, size_t e) { gather_range_boxes(g, boxes, infinity, b, e); });
         return;
     }
     const LampBVH bvh(rec, lamps, nl);
-    parallel_for(n, [&](size_t b, size_t e) { gather_range_bvh(g, bvh, at_infinity, b, e); });
+    parallel_for(n, [&](size_t b, size_t e) { gather_range_bvh(g, bvh, infinite, b, e); });
 }
 
 }  // namespace dacrt

@@ -61,6 +61,12 @@ struct LampRecord {
 constexpr size_t LAMP_RECORD_WIDTH = 52;
 static_assert(sizeof(LampRecord) == LAMP_RECORD_WIDTH * sizeof(float), "LampRecord must be packed floats");
 
+// Whether a lamp is at infinity (a sun or the background): rays that missed everything see it.
+inline bool at_infinity(const LampRecord& lamp) {
+    const int kind = int(lamp.kind);
+    return kind == LAMP_SUN || kind == LAMP_BACKGROUND;
+}
+
 // Empty if the record can be used, else what is wrong (kind/shape codes, non-finite fields).
 std::string lamp_record_error(const LampRecord& r);
 
