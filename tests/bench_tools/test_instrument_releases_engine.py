@@ -13,7 +13,9 @@ from tests.bench.breakdown import Instrument
 
 
 def test_instrumented_renders_leave_no_engine_behind(monkeypatch):
-    addon.register()
+    mine = not hasattr(bpy.types.Scene, 'dacrt')    # (another test of this worker may hold it)
+    if mine:
+        addon.register()
     try:
         caught = []
         monkeypatch.setattr(sys, "unraisablehook", lambda u: caught.append(repr(u.exc_value)))
@@ -30,4 +32,5 @@ def test_instrumented_renders_leave_no_engine_behind(monkeypatch):
             assert figures["samples_done"] == 1 and 0 < figures["trace_share"] < 1, figures
         assert caught == [], caught
     finally:
-        addon.unregister()
+        if mine:
+            addon.unregister()
