@@ -176,18 +176,24 @@ def _test(c, t, geo, i, j, out):
 
 def _big_group(c, t, geo, rows, out):
     """Marks in out the triangles rows of a group above _MAX_GROUP overlapping another of it: of
-    the pairs whose bounding boxes come within twice the group's largest pair tolerance on every
-    axis (_test's own box test, looser), first each triangle's _NEAREST with the closest
-    box centres (a Screw's steps: each overlaps the next, all found there), then those with a
-    triangle not found yet, at most _BUDGET pairs (a floor with a rug on it: a few neighbours each).
-    Past the budget, triangles are left unsaid: the count said is then a lower bound, still true."""
+    the pairs whose bounding boxes come within twice the pair's tolerance on every axis (_test's
+    own box test), first each triangle's _NEAREST with the closest box centres (a Screw's steps:
+    each overlaps the next, all found there), then those with a triangle not found yet, at most
+    _BUDGET pairs (a floor with a rug on it: a few neighbours each). Past the budget, triangles
+    are left unsaid: the count said is then a lower bound, still true."""
     tri = c[rows]
     lo, hi = tri.min(axis=1), tri.max(axis=1)
-    big = max(float(np.abs(tri).max()), 1e-30)
-    margin = 2 * _PAIR_ULPS * float(np.spacing(np.float32(big)))
+    # each triangle's margin, twice the pair tolerance of its own largest coordinate, a pair's
+    # the larger of its two (as in _sparse_pairs): one of the whole group's had let a far face
+    # in the plane's offset bin set it (a floor with a rug by the origin, a doubled ground 1e6
+    # away: a 4 m margin made every pair of the floor near, the budget went on the first rows
+    # and 24 of the 32 triangles under the rug were left unsaid)
+    own = np.maximum(np.abs(tri).max(axis=(1, 2)), 1e-30)
+    m = 2 * _PAIR_ULPS * np.spacing(own.astype(np.float32)).astype(np.float64)
     near = np.ones((len(tri), len(tri)), bool)
-    for d in range(3):
-        near &= (lo[None, :, d] <= hi[:, None, d] + margin) & (lo[:, None, d] <= hi[None, :, d] + margin)
+    for d in range(3):      # (lo_j <= hi_i + max(m_i, m_j) and its mirror, with no (n, n) floats)
+        near &= (lo[None, :, d] <= hi[:, None, d] + m[:, None]) | (lo[None, :, d] - m[None, :] <= hi[:, None, d])
+        near &= (lo[:, None, d] <= hi[None, :, d] + m[None, :]) | (lo[:, None, d] - m[:, None] <= hi[None, :, d])
     np.fill_diagonal(near, False)
     mid = (0.5 * (lo + hi)).astype(np.float32)
     dist = np.zeros(near.shape, np.float32)

@@ -228,6 +228,27 @@ def test_planes_holding_more_than_max_group_triangles_are_checked():
     assert 4 < truth.sum() and (got == truth).all(), (np.nonzero(got)[0], np.nonzero(truth)[0])
 
 
+
+@pytest.mark.parametrize('far', [1e3, 1e6])
+def test_a_rug_on_a_floor_is_found_beside_a_far_ground_in_its_plane(far):
+    """The 30x30 floor and its rug of test_planes_holding_more_than_max_group_triangles_are_checked
+    beside a doubled ground (two quads split along different diagonals) far off in their plane:
+    one plane group above _MAX_GROUP whose areas exceed its bound. Its box margin had been the
+    whole group's (4 m at 1e6): every pair of the floor counted as near, the pair budget went
+    on the first rows and only 8 of the 32 triangles under the rug were found. Now each pair's
+    own, and the same triangles are found as without the ground."""
+    n = 30
+    x, y = np.meshgrid(np.linspace(-1, 1, n + 1), np.linspace(-1, 1, n + 1))
+    i = (np.arange(n)[:, None] * (n + 1) + np.arange(n)[None, :]).ravel()
+    grid = np.r_[np.c_[i, i + 1, i + n + 2], np.c_[i, i + n + 2, i + n + 1]]
+    near = _join((np.c_[x.ravel(), y.ravel(), np.zeros(x.size)], grid), _quad(0.31, 0.52, -0.47, -0.29))
+    alone = _found(*near)
+    assert alone.sum() > 8
+    ground = [_quad(0.2 * far, 1.2 * far, -0.5 * far, 0.5 * far, other_diagonal=d) for d in (False, True)]
+    got = _found(*_join(near, *ground))
+    assert (got[:len(alone)] == alone).all(), f"{int(got[:len(alone)].sum())} found of {int(alone.sum())}"
+    assert got[len(alone):].all()
+
 def _ring(segments=24, inner=0.99, outer=1.0):
     """A thin flat annulus of quads: a sparse shape, mostly empty inside its bounding square."""
     a = np.linspace(0, 2 * np.pi, segments, endpoint=False)
