@@ -695,6 +695,16 @@ def nan_inputs(ntree, types=None, keep=None, colors=False):
     colors: also colour and vector inputs with a NaN among their first three components, those
     showing their value (a texture's hidden Vector is its coordinates, not the value). Disabled
     inputs (a Mix's of its other data types) are read by nothing and skipped."""
+    return [nan_label(node, sock) for node, sock, _ in nan_sockets(ntree, types, keep, colors)]
+
+
+def nan_label(node, sock):
+    """How nan_inputs names a socket: "'input' of 'node'"."""
+    return f"'{sock.name}' of '{node.name}'"
+
+
+def nan_sockets(ntree, types=None, keep=None, colors=False):
+    """(node, socket, is_float) of each input nan_inputs names, in its order."""
     found = []
     for node in getattr(ntree, 'nodes', ()):
         if (types is not None and node.type not in types) or (keep is not None and not keep(node)):
@@ -712,7 +722,7 @@ def nan_inputs(ntree, types=None, keep=None, colors=False):
             else:
                 continue
             if bad and not sock.is_linked:
-                found.append(f"'{sock.name}' of '{node.name}'")
+                found.append((node, sock, isinstance(v, float)))
     return found
 
 

@@ -19,21 +19,22 @@ def nan_inputs_by_kind(ntree):
     from .. import nodeeval
     from ..nodegraph import compiled, used_outputs
     used = used_outputs(ntree)
-    rendered = compiled(ntree, used)
-    computes = lambda n: nodeeval.node_inputs(n) is not None     # noqa: E731
     # (a NaN colour too: a world's Background Color of (NaN, 0.5, 0.5), or one into a Mix,
     # had been rendered without naming the socket; and only nodes Cycles reads: a NaN in a
-    # node left unlinked had been said)
-    nans = [g for g in grouped_inputs(ntree, used) if np.isnan(g.value).any()]
-
-    def found(c, colors, also=lambda n: True):
-        return nodeeval.nan_inputs(ntree, keep=lambda n: rendered(n) and computes(n) == c and also(n),
-                                   colors=colors) + \
-            [g.label for g in nans if computes(g.node) == c and (colors or g.is_float) and also(g.node)]
-    floats = found(False, False)
-    colours = [b for b in found(False, True) if b not in floats]
-    shaders = found(False, True, lambda n: n.type in ('EMISSION', 'BACKGROUND'))
-    return found(True, True), floats, [b for b in colours if b in shaders], [b for b in colours if b not in shaders]
+    # node left unlinked had been said). One scan of the tree, each node's kind asked once
+    # (four scans, one per kind, each asking node_inputs of every node, had been made)
+    found = [(node, nodeeval.nan_label(node, sock), is_float)
+             for node, sock, is_float in nodeeval.nan_sockets(ntree, keep=compiled(ntree, used), colors=True)]
+    found += [(g.node, g.label, g.is_float) for g in grouped_inputs(ntree, used) if np.isnan(g.value).any()]
+    computes = {}       # (by pointer: a group's nodes may share a name with the tree's)
+    for node, _, _ in found:
+        if node.as_pointer() not in computes:
+            computes[node.as_pointer()] = nodeeval.node_inputs(node) is not None
+    computed = [b for node, b, _ in found if computes[node.as_pointer()]]
+    floats = [b for node, b, is_float in found if not computes[node.as_pointer()] and is_float]
+    colours = [(node, b) for node, b, _ in found if not computes[node.as_pointer()] and b not in floats]
+    shader = [b for node, b in colours if node.type in ('EMISSION', 'BACKGROUND')]
+    return computed, floats, shader, [b for _, b in colours if b not in shader]
 
 
 def nan_said(ntree, colours="NaN read as 0 for {}", others="NaN read as 0 for {}"):
