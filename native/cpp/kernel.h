@@ -8,6 +8,7 @@
 #include <deque>
 #include <memory>
 #include <mutex>
+#include <new>
 #include <vector>
 
 #include "interrupt.h"
@@ -49,13 +50,16 @@ class NodePool {
         std::lock_guard<std::mutex> g(m_);
         return used_;
     }
-    // Index of two fresh consecutive nodes, or 0 when the pool is full.
+    // Index of two fresh consecutive nodes, or 0 when the pool is full or a block cannot be
+    // had. Never throws: the caller holds its node locked (state 1), and a throw there left
+    // the node locked for good, so every other thread reaching it spun forever.
     uint32_t alloc2() {
         std::lock_guard<std::mutex> g(m_);
         if (used_ % kBlock == 0) {
             const uint32_t b = used_ / kBlock;
             if (b >= kMaxBlocks) return 0;
-            blocks_[b].reset(new SharedNode[kBlock]);
+            blocks_[b].reset(new (std::nothrow) SharedNode[kBlock]);
+            if (!blocks_[b]) return 0;
         }
         used_ += 2;
         return used_ - 2;
