@@ -113,7 +113,8 @@ class Environment:
     """An Environment Texture lighting the world (equirectangular; lights/environment.py)."""
     pixels: np.ndarray             # (h, w, 3+) float32 linear RGB, row 0 at the bottom (the -Z pole):
                                    # an image's RGBA as read (alpha unread; an 8-bit image's
-                                   # texture.ByteTexels, made into floats only if read)
+                                   # texture.ByteTexels, made into floats only if read); a NaN
+                                   # or infinite channel reads 0 in every lookup blending it in
     strength: np.ndarray           # (3,) multiplies the pixels (the Background's strength)
     to_map: np.ndarray = field(default_factory=lambda: np.eye(3))  # (3,3) orthogonal: world direction
                                                                    # -> the map's frame (Mapping node)

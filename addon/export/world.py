@@ -599,16 +599,26 @@ def _environment(node, strength, reasons, chain=None, frame=None, reading=WHOLE,
     # copies them): an RGB copy, a strength product and numpy's whole-image checks had been
     # ~0.3 s CPU of every frame with a 4K HDRI. An 8-bit image's texels (a table of its bytes)
     # are finite and non-negative, and are not made into floats where its bytes are looked up
-    texels = pixels
+    texels, nan_map = pixels, None
     non_finite, negative, _ = (0, False, True) if isinstance(pixels, ByteTexels) else envkeep.texel_stats(pixels)
     if non_finite or negative:
         texels = np.asarray(pixels[..., :3])
+        # a NaN or infinite channel: NaN in the map (nan_map), which the native lookups blending it
+        # in read as 0 in that channel, as Cycles' blend is NaN there and its film drops it
+        # (over the four cells around the texel: zeroing the texel had darkened 4x less than
+        # Cycles); 0 where the texels are made into something else first (colour nodes, a
+        # mirror ball's resampling, a mean colour)
+        keeps = chain is None and node.projection == 'EQUIRECTANGULAR'
         if non_finite:
-            reasons.append(f"image '{img.name}': {non_finite} pixel(s) not finite, rendered black")
-            texels = np.where(np.isfinite(texels), texels, 0.0)
+            reasons.append(f"image '{img.name}': {non_finite} pixel(s) not finite: the lookups that blend them in "
+                           "read 0 in those channels (black there, as in Cycles)" if keeps else
+                           f"image '{img.name}': {non_finite} pixel(s) not finite, rendered black")
         if negative:
             reasons.append(f"image '{img.name}': negative values rendered as 0")
-            texels = np.maximum(texels, 0.0)
+        finite = np.isfinite(texels) if non_finite else True
+        texels = np.where(finite, np.maximum(texels, 0.0) if negative else texels, 0.0)
+        if non_finite and keeps:
+            nan_map = np.where(finite, texels, np.nan)
     if chain is not None:
         rgb = np.asarray(texels[..., :3])
         px = np.concatenate([rgb, pixels[..., 3:4]], axis=-1).reshape(-1, 4)
@@ -641,7 +651,7 @@ def _environment(node, strength, reasons, chain=None, frame=None, reading=WHOLE,
         # direction, and its background is black
         reasons.append(f"so environment image '{img.name}' is looked up at no direction: black, as in Cycles")
         return np.zeros(3, np.float32), None
-    env = sd.Environment(texels, np.full(3, strength, np.float32),
+    env = sd.Environment(texels if nan_map is None else nan_map, np.full(3, strength, np.float32),
                          to_map, interp,
                          encoded=None if pixels is None else encoded_environment(pixels, interp))
     return np.zeros(3, np.float32), env

@@ -8,7 +8,9 @@ native/cpp/environment.h) are tested against; the integrator renders with those.
   the image's row 0 is the bottom (the -Z pole). World directions reach the map frame through
   `to_map` (the Mapping node's rotation; orthogonal).
 - Lookup 'Linear' (bilinear, texel centres at (j + 0.5) / w) or 'Closest', REPEAT in u and v as
-  Cycles' environment lookup. A map given `encoded` (an sRGB image, which Cycles keeps in its
+  Cycles' environment lookup; a channel blending in a texel's NaN or infinite value reads 0
+  (Cycles' blend is not finite there, and its film drops it). A map given `encoded` (an sRGB
+  image, which Cycles keeps in its
   encoding) blends those texels and decodes the blend, then times the strength; its importance
   comes from its decoded texels (the pixels).
 - Importance, in proportion to the looked-up radiance's RGB mean (luminance) x sin(theta):
@@ -93,8 +95,9 @@ class EnvironmentLight:
 
     @cached_property
     def lum(self) -> np.ndarray:
-        """(h, w) float64 RGB mean per texel."""
-        return self.rgb.astype(np.float64).mean(axis=2)
+        """(h, w) float64 RGB mean per texel, a channel not finite read as 0."""
+        rgb = self.rgb.astype(np.float64)
+        return np.where(np.isfinite(rgb), rgb, 0.0).mean(axis=2)
 
     @cached_property
     def cell_weight(self) -> np.ndarray:
@@ -157,11 +160,15 @@ class EnvironmentLight:
             return np.where(sin_theta > 0, self.uv_pdf(u, v) / (_TWO_PI2 * sin_theta), 0.0)
 
     def radiance(self, u, v):
+        """(3, n) the looked-up radiance; a channel that blends in a texel's NaN or infinite
+        value reads 0 (Cycles' blend is not finite there, and its film drops it)."""
         if self.encoded is not None:
             rgb = texture_lookup(self._encoded_texels(), u.astype(F32), v.astype(F32),
                                  self.interpolation, 'REPEAT')
             return rgb * np.asarray(self._env.strength, F32)[:, None]
-        return texture_lookup(self.rgb, u.astype(F32), v.astype(F32), self.interpolation, 'REPEAT')
+        with np.errstate(invalid='ignore'):
+            rgb = texture_lookup(self.rgb, u.astype(F32), v.astype(F32), self.interpolation, 'REPEAT')
+        return np.where(np.isfinite(rgb), rgb, F32(0.0))
 
     def eval_miss(self, D):
         """(indices, radiance (3, k), solid-angle pdf (k,)) of directions D (3, n) (every one)."""

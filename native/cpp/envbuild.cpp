@@ -166,14 +166,23 @@ std::string build_tables(EnvironmentMap& env, const T* texels, size_t channels, 
             float t[3];
             for (int a = 0; a < 3; ++a) {
                 t[a] = texel_value(texels[k * channels + a]);
-                if (folds) t[a] *= scale[a];
+                // an image's NaN or infinite channel is kept as NaN: every lookup blending it in
+                // reads 0 in that channel (environment.cpp), as Cycles' blend is NaN there and
+                // its film drops it; the importance reads it as 0. A finite value the scale
+                // makes infinite is refused below, as a negative one
+                if (!(std::fabs(t[a]) < std::numeric_limits<float>::infinity()))
+                    t[a] = std::numeric_limits<float>::quiet_NaN();
+                else if (folds)
+                    t[a] *= scale[a];
             }
             for (int a = 0; a < 3; ++a) {
+                if (!(t[a] >= 0 && t[a] < std::numeric_limits<float>::infinity()) && t[a] == t[a] && bad == cells) bad = k;
                 env.rgb[3 * k + a] = t[a];
-                if (!(t[a] >= 0 && t[a] < std::numeric_limits<float>::infinity()) && bad == cells) bad = k;
             }
-            if (srgb)
-                for (int a = 0; a < 3; ++a) t[a] = byte_decode(t[a]) * env.scale[a];
+            for (int a = 0; a < 3; ++a) {
+                if (srgb) t[a] = byte_decode(t[a]) * env.scale[a];
+                if (t[a] != t[a]) t[a] = 0.0f;
+            }
             env.lum[k] = (t[0] + t[1] + t[2]) * (1.0f / 3.0f);
         }
         if (bad < cells) {
@@ -183,8 +192,8 @@ std::string build_tables(EnvironmentMap& env, const T* texels, size_t channels, 
     }, min_rows(width));
     if (first_bad < cells) {
         const float* t = env.rgb.data() + 3 * first_bad;
-        const int a = !(t[0] >= 0 && t[0] < std::numeric_limits<float>::infinity()) ? 0
-                      : !(t[1] >= 0 && t[1] < std::numeric_limits<float>::infinity()) ? 1 : 2;
+        const int a = !(t[0] >= 0 && t[0] < std::numeric_limits<float>::infinity()) && t[0] == t[0]   ? 0
+                      : !(t[1] >= 0 && t[1] < std::numeric_limits<float>::infinity()) && t[1] == t[1] ? 1 : 2;
         return "pixel value " + std::to_string(t[a]) + " at " + std::to_string(first_bad) +
                " is negative or not finite";
     }

@@ -19,6 +19,10 @@ DACRT_ENV_INLINE float bilerp(float a, float b, float c, float d, float fx, floa
     return (a * (1.0f - fx) + b * fx) * (1.0f - fy) + (c * (1.0f - fx) + d * fx) * fy;
 }
 
+// x where finite, else 0 (a lookup blending in a NaN texel, environment.cpp): a select on
+// x - x, which is 0 for every finite x and NaN otherwise, so it vectorises in the lane loops.
+DACRT_ENV_INLINE float finite_or_0(float x) { return x - x == 0.0f ? x : 0.0f; }
+
 // std::min(std::max(x, 0), the float below 1), spelled out: std::min<float> and std::max<float>
 // are inline functions other files use too, and the module's LTO kept one out-of-line copy that
 // the place lanes (envlanes.cpp) then called per lane, which left those loops scalar. The same

@@ -57,7 +57,10 @@ inline void decode(const EnvironmentMap& env, float out[3]) {
     for (int a = 0; a < 3; ++a) out[a] = srgb_to_linear(out[a]) * env.scale[a];
 }
 
-// Radiance at (u, v) in texture space (REPEAT on both axes, as Cycles' environment lookup).
+// Radiance at (u, v) in texture space (REPEAT on both axes, as Cycles' environment lookup). A
+// channel blending in a NaN texel's (an image's NaN or infinite value: envbuild.cpp) reads 0,
+// as Cycles' blend is NaN there and its film's ensure_finite drops it: over the four cells
+// around the texel, not its own area only (zeroing the texel had darkened 4x less than Cycles).
 void lookup(const EnvironmentMap& env, float u, float v, float out[3]) {
     const uint32_t w = env.width, h = env.height;
     const float* px = env.rgb.data();
@@ -65,16 +68,16 @@ void lookup(const EnvironmentMap& env, float u, float v, float out[3]) {
         const size_t k = (size_t(wrap(int64_t(std::floor(v * float(h))), h)) * w +
                           wrap(int64_t(std::floor(u * float(w))), w)) * 3;
         for (int a = 0; a < 3; ++a) out[a] = px[k + a];
-        if (env.srgb) decode(env, out);
-        return;
+    } else {
+        const Cell c = cell_of(env, u, v);
+        const float* p00 = px + (size_t(c.i) * w + c.j) * 3;
+        const float* p01 = px + (size_t(c.i) * w + c.j1) * 3;
+        const float* p10 = px + (size_t(c.i1) * w + c.j) * 3;
+        const float* p11 = px + (size_t(c.i1) * w + c.j1) * 3;
+        for (int a = 0; a < 3; ++a) out[a] = bilerp(p00[a], p01[a], p10[a], p11[a], c.fx, c.fy);
     }
-    const Cell c = cell_of(env, u, v);
-    const float* p00 = px + (size_t(c.i) * w + c.j) * 3;
-    const float* p01 = px + (size_t(c.i) * w + c.j1) * 3;
-    const float* p10 = px + (size_t(c.i1) * w + c.j) * 3;
-    const float* p11 = px + (size_t(c.i1) * w + c.j1) * 3;
-    for (int a = 0; a < 3; ++a) out[a] = bilerp(p00[a], p01[a], p10[a], p11[a], c.fx, c.fy);
     if (env.srgb) decode(env, out);
+    for (int a = 0; a < 3; ++a) out[a] = envcell::finite_or_0(out[a]);
 }
 
 // The pdf over (u, v) at (u, v): constant per texel ('Closest'), or the cell's scale times the

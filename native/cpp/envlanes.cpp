@@ -69,8 +69,8 @@ using BlendFn = void (*)(const EnvTexels&, size_t, bool, bool, float*, size_t, f
         }                                                                                                     \
         for (int a = 0; a < 3; ++a)                                                                           \
             for (size_t k = 0; k < m; ++k) {                                                                  \
-                const float le = envcell::bilerp(t.rgb[0][a][k], t.rgb[1][a][k], t.rgb[2][a][k], t.rgb[3][a][k],\
-                                                 t.fx[k], t.fy[k]);                                           \
+                const float le = envcell::finite_or_0(                                                                \
+                    envcell::bilerp(t.rgb[0][a][k], t.rgb[1][a][k], t.rgb[2][a][k], t.rgb[3][a][k], t.fx[k], t.fy[k])); \
                 const float inv = pdf[k] > 0 ? 1.0f / pdf[k] : 0.0f;                                          \
                 out[a * stride + k] = divide ? le * inv : le;                                                 \
             }                                                                                                 \
