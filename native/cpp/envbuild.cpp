@@ -163,25 +163,25 @@ std::string build_tables(EnvironmentMap& env, const T* texels, size_t channels, 
     parallel_for(height, [&](size_t b, size_t e) {
         size_t bad = cells;
         for (size_t k = b * width; k < e * width; ++k) {
+            // an image's NaN or infinite channel is kept as NaN: every lookup blending it in
+            // reads 0 in that channel (environment.cpp), as Cycles' blend is NaN there and its
+            // film drops it; the importance reads it as 0. A finite value negative, or one the
+            // scale makes infinite, is refused (selects, no branch per channel)
+            constexpr float inf = std::numeric_limits<float>::infinity();
             float t[3];
+            bool fault = false;
             for (int a = 0; a < 3; ++a) {
-                t[a] = texel_value(texels[k * channels + a]);
-                // an image's NaN or infinite channel is kept as NaN: every lookup blending it in
-                // reads 0 in that channel (environment.cpp), as Cycles' blend is NaN there and
-                // its film drops it; the importance reads it as 0. A finite value the scale
-                // makes infinite is refused below, as a negative one
-                if (!(std::fabs(t[a]) < std::numeric_limits<float>::infinity()))
-                    t[a] = std::numeric_limits<float>::quiet_NaN();
-                else if (folds)
-                    t[a] *= scale[a];
-            }
-            for (int a = 0; a < 3; ++a) {
-                if (!(t[a] >= 0 && t[a] < std::numeric_limits<float>::infinity()) && t[a] == t[a] && bad == cells) bad = k;
+                const float x = texel_value(texels[k * channels + a]);
+                const float y = folds ? x * scale[a] : x;
+                const bool kept = std::fabs(x) < inf;
+                fault |= kept & !(y >= 0 && y < inf);
+                t[a] = kept ? y : std::numeric_limits<float>::quiet_NaN();
                 env.rgb[3 * k + a] = t[a];
             }
+            if (fault && bad == cells) bad = k;
             for (int a = 0; a < 3; ++a) {
                 if (srgb) t[a] = byte_decode(t[a]) * env.scale[a];
-                if (t[a] != t[a]) t[a] = 0.0f;
+                t[a] = t[a] == t[a] ? t[a] : 0.0f;
             }
             env.lum[k] = (t[0] + t[1] + t[2]) * (1.0f / 3.0f);
         }
