@@ -152,8 +152,7 @@ std::string build_tables(EnvironmentMap& env, const T* texels, size_t channels, 
     for (int a = 0; a < 3; ++a) env.scale[a] = srgb && scale ? scale[a] : 1.0f;
     std::copy(to_map, to_map + 9, env.to_map);
     const size_t cells = size_t(width) * height;
-    env.rgb.resize(cells * 3);
-    env.lum.resize(cells);
+    env.texel.resize(cells * 4);
     // The radiance texels (a linear map's RGB x scale, an sRGB map's encoded RGB) and each
     // one's luminance (an sRGB map's: of the decoded texel x scale, as the lookup decodes).
     std::mutex first_lock;
@@ -176,14 +175,14 @@ std::string build_tables(EnvironmentMap& env, const T* texels, size_t channels, 
                 const bool kept = std::fabs(x) < inf;
                 fault |= kept & !(y >= 0 && y < inf);
                 t[a] = kept ? y : std::numeric_limits<float>::quiet_NaN();
-                env.rgb[3 * k + a] = t[a];
+                env.texel[4 * k + a] = t[a];
             }
             if (fault && bad == cells) bad = k;
             for (int a = 0; a < 3; ++a) {
                 if (srgb) t[a] = byte_decode(t[a]) * env.scale[a];
                 t[a] = t[a] == t[a] ? t[a] : 0.0f;
             }
-            env.lum[k] = (t[0] + t[1] + t[2]) * (1.0f / 3.0f);
+            env.texel[4 * k + 3] = (t[0] + t[1] + t[2]) * (1.0f / 3.0f);
         }
         if (bad < cells) {
             std::lock_guard<std::mutex> hold(first_lock);
@@ -191,7 +190,7 @@ std::string build_tables(EnvironmentMap& env, const T* texels, size_t channels, 
         }
     }, min_rows(width));
     if (first_bad < cells) {
-        const float* t = env.rgb.data() + 3 * first_bad;
+        const float* t = env.texel.data() + 4 * first_bad;
         const int a = !(t[0] >= 0 && t[0] < std::numeric_limits<float>::infinity()) && t[0] == t[0]   ? 0
                       : !(t[1] >= 0 && t[1] < std::numeric_limits<float>::infinity()) && t[1] == t[1] ? 1 : 2;
         return "pixel value " + std::to_string(t[a]) + " at " + std::to_string(first_bad) +
@@ -210,19 +209,19 @@ std::string build_tables(EnvironmentMap& env, const T* texels, size_t channels, 
         else
             row_sin[i] = (sin_integral((i + 0.5) / height, 1.0) + sin_integral(0.0, 0.5 / height)) * height;
     }
-    const float* L = env.lum.data();
+    const float* L = env.texel.data() + 3;  // luminance, stride 4
     // The means of row i's cells, in double: their corners' ('Linear': with the next row and
     // column, wrapped) or the texel ('Closest')
     auto cell_means = [&](uint32_t i, double* m) {
-        const float* r = L + size_t(i) * width;
+        const float* r = L + size_t(i) * width * 4;
         if (closest) {
-            for (uint32_t j = 0; j < width; ++j) m[j] = double(r[j]);
+            for (uint32_t j = 0; j < width; ++j) m[j] = double(r[4 * j]);
             return;
         }
-        const float* r1 = L + size_t(i + 1 == height ? 0 : i + 1) * width;
+        const float* r1 = L + size_t(i + 1 == height ? 0 : i + 1) * width * 4;
         for (uint32_t j = 0; j < width; ++j) {
             const uint32_t j1 = j + 1 == width ? 0 : j + 1;
-            m[j] = (double(r[j]) + r[j1] + r1[j] + r1[j1]) / 4.0;
+            m[j] = (double(r[4 * j]) + r[4 * j1] + r1[4 * j] + r1[4 * j1]) / 4.0;
         }
     };
     env.row_cdf.assign(size_t(height) + 1, 0.0);

@@ -63,17 +63,17 @@ inline void decode(const EnvironmentMap& env, float out[3]) {
 // around the texel, not its own area only (zeroing the texel had darkened 4x less than Cycles).
 void lookup(const EnvironmentMap& env, float u, float v, float out[3]) {
     const uint32_t w = env.width, h = env.height;
-    const float* px = env.rgb.data();
+    const float* px = env.texel.data();
     if (env.closest) {
         const size_t k = (size_t(wrap(int64_t(std::floor(v * float(h))), h)) * w +
-                          wrap(int64_t(std::floor(u * float(w))), w)) * 3;
+                          wrap(int64_t(std::floor(u * float(w))), w)) * 4;
         for (int a = 0; a < 3; ++a) out[a] = px[k + a];
     } else {
         const Cell c = cell_of(env, u, v);
-        const float* p00 = px + (size_t(c.i) * w + c.j) * 3;
-        const float* p01 = px + (size_t(c.i) * w + c.j1) * 3;
-        const float* p10 = px + (size_t(c.i1) * w + c.j) * 3;
-        const float* p11 = px + (size_t(c.i1) * w + c.j1) * 3;
+        const float* p00 = px + (size_t(c.i) * w + c.j) * 4;
+        const float* p01 = px + (size_t(c.i) * w + c.j1) * 4;
+        const float* p10 = px + (size_t(c.i1) * w + c.j) * 4;
+        const float* p11 = px + (size_t(c.i1) * w + c.j1) * 4;
         for (int a = 0; a < 3; ++a) out[a] = bilerp(p00[a], p01[a], p10[a], p11[a], c.fx, c.fy);
     }
     if (env.srgb) decode(env, out);
@@ -90,10 +90,10 @@ inline float uv_pdf(const EnvironmentMap& env, float u, float v) {
         return env.cell_pdf[i * w + j];
     }
     const Cell c = cell_of(env, u, v);
-    const float* L = env.lum.data();
-    return env.cell_pdf[size_t(c.i) * w + c.j] * bilerp(L[size_t(c.i) * w + c.j], L[size_t(c.i) * w + c.j1],
-                                                         L[size_t(c.i1) * w + c.j], L[size_t(c.i1) * w + c.j1],
-                                                         c.fx, c.fy);
+    const float* L = env.texel.data() + 3;  // luminance, stride 4
+    return env.cell_pdf[size_t(c.i) * w + c.j] * bilerp(L[(size_t(c.i) * w + c.j) * 4], L[(size_t(c.i) * w + c.j1) * 4],
+                                                         L[(size_t(c.i1) * w + c.j) * 4],
+                                                         L[(size_t(c.i1) * w + c.j1) * 4], c.fx, c.fy);
 }
 
 // The index k with c[k] <= u < c[k + 1] among c[0..count], at most count - 1, for a guided CDF.
@@ -148,8 +148,8 @@ inline Picked pick_cell(const EnvironmentMap& env, float u1, float u2) {
 inline void corners(const EnvironmentMap& env, const Picked& p, float& a, float& b, float& c, float& d) {
     const size_t w = env.width, i = p.i, j = p.j;
     const size_t i1 = i + 1 == env.height ? 0 : i + 1, j1 = j + 1 == w ? 0 : j + 1;
-    const float* L = env.lum.data();
-    a = L[i * w + j], b = L[i * w + j1], c = L[i1 * w + j], d = L[i1 * w + j1];
+    const float* L = env.texel.data() + 3;  // luminance, stride 4
+    a = L[(i * w + j) * 4], b = L[(i * w + j1) * 4], c = L[(i1 * w + j) * 4], d = L[(i1 * w + j1) * 4];
 }
 
 // 'Closest': fu, fv < 1, but the division can round u up onto the next texel's edge, whose
@@ -202,9 +202,10 @@ inline void fill_texels(const EnvironmentMap& env, float u, float v, float s, En
     const size_t at[4] = {size_t(c.i) * w + c.j, size_t(c.i) * w + c.j1, size_t(c.i1) * w + c.j,
                           size_t(c.i1) * w + c.j1};
     t.cell[k] = env.cell_pdf[at[0]];
-    for (int q = 0; q < 4; ++q) {
-        t.lum[q][k] = env.lum[at[q]];
-        for (int a = 0; a < 3; ++a) t.rgb[q][a][k] = env.rgb[at[q] * 3 + a];
+    for (int q = 0; q < 4; ++q) {  // one record a corner
+        const float* x = env.texel.data() + at[q] * 4;
+        for (int a = 0; a < 3; ++a) t.rgb[q][a][k] = x[a];
+        t.lum[q][k] = x[3];
     }
 }
 
@@ -232,7 +233,8 @@ void gather_range(const EnvironmentMap* env, float prob, const float* D, const u
         equirect_uv_lanes(env->to_map, dx, dy, dz, m, us, vs, ss);
         if (lanes) {
             for (size_t q = 0; q < m; ++q) fill_texels(*env, us[q], vs[q], ss[q], tex, q);
-            env_blend_lanes(tex, m, env->total > 0, false, Les, kEnvLanes, pdfs);
+            // camera rays (prob 0) weigh nothing by the pdf: its blend is not computed
+            env_blend_lanes(tex, m, env->total > 0 && prob > 0, false, Les, kEnvLanes, pdfs);
         }
         for (size_t q = 0; q < m; ++q) {
             const size_t r = idx[q];

@@ -37,9 +37,11 @@ namespace dacrt {
 struct EnvironmentMap {
     uint32_t width = 0, height = 0;
     bool closest = false;               // 'Closest' interpolation, else bilinear
-    bool srgb = false;                  // rgb is sRGB-encoded: decoded after the blend, then x scale
+    bool srgb = false;                  // texel RGB is sRGB-encoded: decoded after the blend, then x scale
     float scale[3] = {1, 1, 1};         // multiplies an sRGB map's decoded radiance
-    std::vector<float> rgb;             // height x width x 3, row 0 at the bottom
+    std::vector<float> texel;           // height x width x 4, row 0 at the bottom: RGB and luminance
+                                        // (RGB mean; an sRGB map's of the decoded texel x scale) per texel, one 16-byte record, so a corner's
+                                        // colour and luminance share a cache line
     std::vector<double> row_cdf;        // height + 1: cumulative row weights / total, [0] = 0, [h] = 1
     uint32_t row_buckets = 1;           // the same guide (below) for row_cdf: R + 1 entries
     std::vector<uint32_t> row_guide;
@@ -48,7 +50,6 @@ struct EnvironmentMap {
     std::vector<uint32_t> col_guide;    // height x (G + 1): per row, where u2 = b/G lands in its
                                         // CDF (std::upper_bound's position), so a sample searches
                                         // only between its bucket's two entries
-    std::vector<float> lum;             // height x width: RGB mean per texel
     std::vector<float> cell_pdf;        // height x width: the pdf over (u, v) per cell ('Closest'), or
                                         // the factor of the corners' bilinear luminance ('Linear')
     float to_map[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};   // row-major, orthogonal

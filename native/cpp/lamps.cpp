@@ -92,13 +92,13 @@ void gather_infinite(const Gather& g, const LampRecord& lamp, int32_t key, size_
             const size_t i = i0 + q;
             const float d[3] = {Dx[i], Dy[i], Dz[i]};
             idx[m] = uint32_t(q);
-            m += size_t(g.miss[i] != 0) & size_t(!sun || lampmath::dot3(d, lamp.pos) >= lamp.cos_half);
+            m += size_t(g.miss[i] != 0) & size_t(!sun || in_sun_disk(lamp, d));
         }
-        for (size_t q = 0; q < m; ++q) {
+        for (size_t q = 0; q < m; ++q) {  // each listed ray sees the lamp: miss_lamp's radiance
             const size_t i = i0 + idx[q];
             const float d[3] = {Dx[i], Dy[i], Dz[i]};
             float Le[3], pdf_l;
-            miss_lamp(lamp, d, Le, pdf_l);
+            infinite_radiance(lamp, d, Le, pdf_l);
             gather_add(g, Le, pdf_l, key, k, i);
         }
     }

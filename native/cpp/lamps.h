@@ -706,15 +706,13 @@ __attribute__((always_inline)) inline bool hit_lamp(const LampRecord& L, const f
     return seen;
 }
 
-// A ray that left the scene along D seeing lamp L at infinity (Lamp.eval_miss): radiance and
-// solid-angle pdf. False for finite lamps and the delta sun.
-inline bool miss_lamp(const LampRecord& L, const float D[3], float Le[3], float& pdf) {
-    const int kind = int(L.kind);
-    if (kind == LAMP_SUN) {
-        if (int(L.shape) == SUN_DELTA || !(lampmath::dot3(D, L.pos) >= L.cos_half)) return false;
-    } else if (kind != LAMP_BACKGROUND) {
-        return false;
-    }
+// Whether direction D falls in the disk of sun L with an angle (SUN_CONE): miss_lamp's test,
+// which lamp_gather's lamps at infinity (lamps.cpp) also list their rays by.
+inline bool in_sun_disk(const LampRecord& L, const float D[3]) { return lampmath::dot3(D, L.pos) >= L.cos_half; }
+
+// The radiance and solid-angle pdf of lamp L at infinity (a sun with an angle, or the
+// background) seen along D, D in its disk: miss_lamp once it has seen the lamp.
+inline void infinite_radiance(const LampRecord& L, const float D[3], float Le[3], float& pdf) {
     float scale = 1.0f;
     if (L.ies != 0) {  // a sun's profile along the direction it travels (as sample_lamp weighs it)
         const float from_light[3] = {-D[0], -D[1], -D[2]};
@@ -722,6 +720,18 @@ inline bool miss_lamp(const LampRecord& L, const float D[3], float Le[3], float&
     }
     for (int a = 0; a < 3; ++a) Le[a] = L.emit[a] * scale;
     pdf = L.pdf;
+}
+
+// A ray that left the scene along D seeing lamp L at infinity (Lamp.eval_miss): radiance and
+// solid-angle pdf. False for finite lamps and the delta sun.
+inline bool miss_lamp(const LampRecord& L, const float D[3], float Le[3], float& pdf) {
+    const int kind = int(L.kind);
+    if (kind == LAMP_SUN) {
+        if (int(L.shape) == SUN_DELTA || !in_sun_disk(L, D)) return false;
+    } else if (kind != LAMP_BACKGROUND) {
+        return false;
+    }
+    infinite_radiance(L, D, Le, pdf);
     return true;
 }
 
