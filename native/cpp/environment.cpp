@@ -184,6 +184,20 @@ inline void weigh_sample(const EnvironmentMap& env, float u, float v, float s, f
     for (int a = 0; a < 3; ++a) value[a] = Le[a] * inv;
 }
 
+// The records of the cell with rows i, i1 and columns j, j1 into lane k of t: its pdf factor,
+// its corners' colours and luminances.
+inline void read_corners(const EnvironmentMap& env, uint32_t i, uint32_t i1, uint32_t j, uint32_t j1, EnvTexels& t,
+                         size_t k) {
+    const size_t w = env.width;
+    const size_t at[4] = {size_t(i) * w + j, size_t(i) * w + j1, size_t(i1) * w + j, size_t(i1) * w + j1};
+    t.cell[k] = env.cell_pdf[at[0]];
+    for (int q = 0; q < 4; ++q) {  // one record a corner
+        const float* x = env.texel.data() + at[q] * 4;
+        for (int a = 0; a < 3; ++a) t.rgb[q][a][k] = x[a];
+        t.lum[q][k] = x[3];
+    }
+}
+
 // 'Linear' without sRGB: what the lookup and the pdf at (u, v) read, into lane k of t (s < 0: no
 // direction, zeros, so the blends give 0 as eval_uv).
 inline void fill_texels(const EnvironmentMap& env, float u, float v, float s, EnvTexels& t, size_t k) {
@@ -196,16 +210,23 @@ inline void fill_texels(const EnvironmentMap& env, float u, float v, float s, En
         }
         return;
     }
-    const size_t w = env.width;
     const Cell c = cell_of(env, u, v);
     t.fx[k] = c.fx, t.fy[k] = c.fy;
-    const size_t at[4] = {size_t(c.i) * w + c.j, size_t(c.i) * w + c.j1, size_t(c.i1) * w + c.j,
-                          size_t(c.i1) * w + c.j1};
-    t.cell[k] = env.cell_pdf[at[0]];
-    for (int q = 0; q < 4; ++q) {  // one record a corner
-        const float* x = env.texel.data() + at[q] * 4;
-        for (int a = 0; a < 3; ++a) t.rgb[q][a][k] = x[a];
-        t.lum[q][k] = x[3];
+    read_corners(env, c.i, c.i1, c.j, c.j1, t, k);
+}
+
+// fill_texels for places k < m: the cells found lane by lane (env_cell_lanes), then the records
+// read place by place; a place without a direction or outside one period of REPEAT as above.
+void fill_texels_lanes(const EnvironmentMap& env, const float* u, const float* v, const float* s, size_t m,
+                       EnvCells& c, EnvTexels& t) {
+    env_cell_lanes(env.width, env.height, u, v, s, m, c);
+    for (size_t k = 0; k < m; ++k) {
+        if (!c.ok[k]) {
+            fill_texels(env, u[k], v[k], s[k], t, k);
+            continue;
+        }
+        t.s[k] = s[k], t.fx[k] = c.fx[k], t.fy[k] = c.fy[k];
+        read_corners(env, c.i0[k], c.i1[k], c.j0[k], c.j1[k], t, k);
     }
 }
 
@@ -219,6 +240,7 @@ void gather_range(const EnvironmentMap* env, float prob, const float* D, const u
     size_t idx[K];
     float dx[K], dy[K], dz[K], us[K], vs[K], ss[K];
     const bool lanes = blends_in_lanes(*env);
+    EnvCells cells;
     EnvTexels tex;
     float Les[3 * kEnvLanes], pdfs[kEnvLanes];
     size_t i = b;
@@ -232,7 +254,7 @@ void gather_range(const EnvironmentMap* env, float prob, const float* D, const u
         }
         equirect_uv_lanes(env->to_map, dx, dy, dz, m, us, vs, ss);
         if (lanes) {
-            for (size_t q = 0; q < m; ++q) fill_texels(*env, us[q], vs[q], ss[q], tex, q);
+            fill_texels_lanes(*env, us, vs, ss, m, cells, tex);
             // camera rays (prob 0) weigh nothing by the pdf: its blend is not computed
             env_blend_lanes(tex, m, env->total > 0 && prob > 0, false, Les, kEnvLanes, pdfs);
         }
@@ -296,6 +318,7 @@ void environment_sample_lanes(const EnvironmentMap& env, const float* u1, const 
     }
     constexpr size_t K = kEnvLanes;
     EnvPicks in;
+    EnvCells cells;
     EnvTexels tex;
     Picked picked[K];
     float us[K], vs[K], ss[K];
@@ -314,7 +337,7 @@ void environment_sample_lanes(const EnvironmentMap& env, const float* u1, const 
             for (size_t k = 0; k < c; ++k) keep_inside(env, picked[k], us[k], vs[k]);
         equirect_dir_lanes(env.to_map, us, vs, c, wi + k0, wi + stride + k0, wi + 2 * stride + k0, ss);
         if (blends_in_lanes(env)) {
-            for (size_t k = 0; k < c; ++k) fill_texels(env, us[k], vs[k], ss[k], tex, k);
+            fill_texels_lanes(env, us, vs, ss, c, cells, tex);
             env_blend_lanes(tex, c, true, true, value + k0, stride, pdf + k0);
             continue;
         }

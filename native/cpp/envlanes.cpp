@@ -6,6 +6,8 @@
 #include "envlanes.h"
 
 
+#include <cmath>
+
 #include "dispatch.h"
 #include "envcell.h"
 #include "equirect.h"
@@ -17,6 +19,7 @@ namespace {
 using UvFn = void (*)(const float*, const float*, const float*, const float*, size_t, float*, float*, float*);
 using DirFn = void (*)(const float*, const float*, const float*, size_t, float*, float*, float*, float*);
 using PlaceFn = void (*)(bool, float, float, const EnvPicks&, size_t, float*, float*);
+using CellFn = void (*)(uint32_t, uint32_t, const float*, const float*, const float*, size_t, EnvCells&);
 using BlendFn = void (*)(const EnvTexels&, size_t, bool, bool, float*, size_t, float*);
 
 #define DACRT_EQUIRECT_ISA(NAME, TARGET)                                                                     \
@@ -60,6 +63,22 @@ using BlendFn = void (*)(const EnvTexels&, size_t, bool, bool, float*, size_t, f
                                       v[k]);                                                                  \
         }                                                                                                     \
     }                                                                                                         \
+    TARGET void NAME##_cells(uint32_t w, uint32_t h, const float* __restrict u, const float* __restrict v,    \
+                             const float* __restrict s, size_t m, EnvCells& c) {                              \
+        const float fw = float(w), fh = float(h);                                                             \
+        const int32_t iw = int32_t(w), ih = int32_t(h);                                                       \
+        for (size_t k = 0; k < m; ++k) {                                                                      \
+            const float x = u[k] * fw - 0.5f, y = v[k] * fh - 0.5f;                                           \
+            const float x0 = std::floor(x), y0 = std::floor(y);                                               \
+            c.fx[k] = x - x0, c.fy[k] = y - y0;                                                               \
+            /* u, v in [0, 1]: x0 in [-1, w - 1], y0 in [-1, h - 1], one step of wrap (NaN: not ok) */         \
+            const bool in = s[k] >= 0.0f && x0 >= -1.0f && x0 <= fw - 1.0f && y0 >= -1.0f && y0 <= fh - 1.0f;  \
+            const int32_t j = in ? int32_t(x0) : 0, i = in ? int32_t(y0) : 0;                                 \
+            c.j0[k] = uint32_t(j < 0 ? j + iw : j), c.j1[k] = uint32_t(j + 1 == iw ? 0 : j + 1);              \
+            c.i0[k] = uint32_t(i < 0 ? i + ih : i), c.i1[k] = uint32_t(i + 1 == ih ? 0 : i + 1);              \
+            c.ok[k] = in;                                                                                     \
+        }                                                                                                     \
+    }                                                                                                         \
     TARGET void NAME##_blend(const EnvTexels& t, size_t m, bool has_pdf, bool divide, float* __restrict out,    \
                              size_t stride, float* __restrict pdf) {                                          \
         for (size_t k = 0; k < m; ++k) {                                                                      \
@@ -97,6 +116,11 @@ void equirect_dir_lanes(const float to_map[9], const float* u, const float* v, s
 void env_place_lanes(bool closest, float fw, float fh, const EnvPicks& in, size_t m, float* u, float* v) {
     static const PlaceFn fn = lane_copy<PlaceFn>(portable_place, avx2_place, avx512_place);
     fn(closest, fw, fh, in, m, u, v);
+}
+
+void env_cell_lanes(uint32_t w, uint32_t h, const float* u, const float* v, const float* s, size_t m, EnvCells& c) {
+    static const CellFn fn = lane_copy<CellFn>(portable_cells, avx2_cells, avx512_cells);
+    fn(w, h, u, v, s, m, c);
 }
 
 void env_blend_lanes(const EnvTexels& t, size_t m, bool has_pdf, bool divide, float* out, size_t stride, float* pdf) {

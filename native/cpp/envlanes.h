@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 
 namespace dacrt {
 
@@ -34,6 +35,20 @@ struct EnvTexels {
     float lum[4][kEnvLanes];
     float rgb[4][3][kEnvLanes];
 };
+
+// The cells between texel centres where a 'Linear' lookup at up to kEnvLanes places k reads
+// (environment.cpp's cell_of): the place (fx, fy) in the cell, its rows i0, i1 = i0 + 1 and
+// columns j0, j1 = j0 + 1 (wrapped), and ok where the place has a direction (sin(theta) >= 0)
+// and its corners lie within one period of REPEAT (u, v in [0, 1]; elsewhere cell_of's wrap
+// takes over).
+struct EnvCells {
+    float fx[kEnvLanes], fy[kEnvLanes];
+    uint32_t i0[kEnvLanes], i1[kEnvLanes], j0[kEnvLanes], j1[kEnvLanes], ok[kEnvLanes];
+};
+
+// For k < m: the cells of a w x h map's places (u, v)[k] with sin(theta) s[k], in cell_of's
+// operations (the same bits).
+void env_cell_lanes(uint32_t w, uint32_t h, const float* u, const float* v, const float* s, size_t m, EnvCells& c);
 
 // For k < m: the blends of t (environment.cpp's lookup and uv_pdf): the solid-angle pdf[k] (0
 // without has_pdf or where s <= 0) and the radiance, or with divide radiance / pdf (0 where the
