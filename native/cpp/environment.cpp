@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 
 #include "envcell.h"
 #include "envlanes.h"
@@ -184,53 +185,51 @@ inline void weigh_sample(const EnvironmentMap& env, float u, float v, float s, f
     for (int a = 0; a < 3; ++a) value[a] = Le[a] * inv;
 }
 
-// The records of the cell with rows i, i1 and columns j, j1 into lane k of t: its pdf factor,
-// its corners' colours and luminances.
-inline void read_corners(const EnvironmentMap& env, uint32_t i, uint32_t i1, uint32_t j, uint32_t j1, EnvTexels& t,
-                         size_t k) {
+// A texel record (r, g, b, luminance) as one 16-byte vector: the four channels' blends in one
+// set of operations, each channel's those of bilerp (envcell.h) in order, so the same bits.
+typedef float Record __attribute__((vector_size(16)));
+
+// 'Linear' without sRGB: the lookup and the pdf in the cell with rows i, i1 and columns j, j1 at
+// (fx, fy), sin(theta) s >= 0: radiance into out[0, stride, 2 stride] (divided by the pdf with
+// divide, 0 where it is 0) and the solid-angle pdf (0 without has_pdf or where s is 0).
+inline void blend_cell(const EnvironmentMap& env, uint32_t i, uint32_t i1, uint32_t j, uint32_t j1, float fx,
+                       float fy, float s, bool has_pdf, bool divide, float* out, size_t stride, float& pdf) {
     const size_t w = env.width;
     const size_t at[4] = {size_t(i) * w + j, size_t(i) * w + j1, size_t(i1) * w + j, size_t(i1) * w + j1};
-    t.cell[k] = env.cell_pdf[at[0]];
-    for (int q = 0; q < 4; ++q) {  // one record a corner
-        const float* x = env.texel.data() + at[q] * 4;
-        for (int a = 0; a < 3; ++a) t.rgb[q][a][k] = x[a];
-        t.lum[q][k] = x[3];
+    Record c[4];
+    for (int q = 0; q < 4; ++q) std::memcpy(&c[q], env.texel.data() + at[q] * 4, sizeof(Record));
+    const float gx = 1.0f - fx, gy = 1.0f - fy;
+    const Record b = (c[0] * gx + c[1] * fx) * gy + (c[2] * gx + c[3] * fx) * fy;
+    pdf = has_pdf && s > 0 ? env.cell_pdf[at[0]] * b[3] * INV_2PI2 / s : 0.0f;
+    const float inv = pdf > 0 ? 1.0f / pdf : 0.0f;
+    // a channel blending in a NaN texel reads 0, as lookup
+    for (int a = 0; a < 3; ++a) {
+        const float le = envcell::finite_or_0(b[a]);
+        out[a * stride] = divide ? le * inv : le;
     }
 }
 
-// 'Linear' without sRGB: what the lookup and the pdf at (u, v) read, into lane k of t (s < 0: no
-// direction, zeros, so the blends give 0 as eval_uv).
-inline void fill_texels(const EnvironmentMap& env, float u, float v, float s, EnvTexels& t, size_t k) {
-    t.s[k] = s;
-    if (!(s >= 0.0f)) {
-        t.fx[k] = t.fy[k] = t.cell[k] = 0.0f;
-        for (int c = 0; c < 4; ++c) {
-            t.lum[c][k] = 0.0f;
-            for (int a = 0; a < 3; ++a) t.rgb[c][a][k] = 0.0f;
-        }
-        return;
-    }
-    const Cell c = cell_of(env, u, v);
-    t.fx[k] = c.fx, t.fy[k] = c.fy;
-    read_corners(env, c.i, c.i1, c.j, c.j1, t, k);
-}
-
-// fill_texels for places k < m: the cells found lane by lane (env_cell_lanes), then the records
-// read place by place; a place without a direction or outside one period of REPEAT as above.
-void fill_texels_lanes(const EnvironmentMap& env, const float* u, const float* v, const float* s, size_t m,
-                       EnvCells& c, EnvTexels& t) {
+// blend_cell at places (u, v)[k], sin(theta) s[k], k < m, the cells found lane by lane
+// (env_cell_lanes; elsewhere than one period of REPEAT by cell_of): out[a * stride + k], pdf[k].
+// A place without a direction (s < 0) gets 0 and pdf 0, as eval_uv.
+void blend_places(const EnvironmentMap& env, const float* u, const float* v, const float* s, size_t m, EnvCells& c,
+                  bool has_pdf, bool divide, float* out, size_t stride, float* pdf) {
     env_cell_lanes(env.width, env.height, u, v, s, m, c);
     for (size_t k = 0; k < m; ++k) {
-        if (!c.ok[k]) {
-            fill_texels(env, u[k], v[k], s[k], t, k);
-            continue;
+        if (c.ok[k]) {
+            blend_cell(env, c.i0[k], c.i1[k], c.j0[k], c.j1[k], c.fx[k], c.fy[k], s[k], has_pdf, divide, out + k,
+                       stride, pdf[k]);
+        } else if (s[k] >= 0.0f) {
+            const Cell x = cell_of(env, u[k], v[k]);
+            blend_cell(env, x.i, x.i1, x.j, x.j1, x.fx, x.fy, s[k], has_pdf, divide, out + k, stride, pdf[k]);
+        } else {
+            for (int a = 0; a < 3; ++a) out[a * stride + k] = 0.0f;
+            pdf[k] = 0.0f;
         }
-        t.s[k] = s[k], t.fx[k] = c.fx[k], t.fy[k] = c.fy[k];
-        read_corners(env, c.i0[k], c.i1[k], c.j0[k], c.j1[k], t, k);
     }
 }
 
-// The blends run as lane loops (env_blend_lanes) for 'Linear' maps without sRGB decoding.
+// The lookups and pdfs run through blend_places for 'Linear' maps without sRGB decoding.
 inline bool blends_in_lanes(const EnvironmentMap& env) { return !env.closest && !env.srgb; }
 
 // The missed rays of [b, e) in chunks: their (u, v) lane by lane (envlanes.h), then the lookups.
@@ -241,7 +240,6 @@ void gather_range(const EnvironmentMap* env, float prob, const float* D, const u
     float dx[K], dy[K], dz[K], us[K], vs[K], ss[K];
     const bool lanes = blends_in_lanes(*env);
     EnvCells cells;
-    EnvTexels tex;
     float Les[3 * kEnvLanes], pdfs[kEnvLanes];
     size_t i = b;
     while (i < e) {
@@ -254,9 +252,8 @@ void gather_range(const EnvironmentMap* env, float prob, const float* D, const u
         }
         equirect_uv_lanes(env->to_map, dx, dy, dz, m, us, vs, ss);
         if (lanes) {
-            fill_texels_lanes(*env, us, vs, ss, m, cells, tex);
-            // camera rays (prob 0) weigh nothing by the pdf: its blend is not computed
-            env_blend_lanes(tex, m, env->total > 0 && prob > 0, false, Les, kEnvLanes, pdfs);
+            // camera rays (prob 0) weigh nothing by the pdf: it is not computed
+            blend_places(*env, us, vs, ss, m, cells, env->total > 0 && prob > 0, false, Les, kEnvLanes, pdfs);
         }
         for (size_t q = 0; q < m; ++q) {
             const size_t r = idx[q];
@@ -319,7 +316,6 @@ void environment_sample_lanes(const EnvironmentMap& env, const float* u1, const 
     constexpr size_t K = kEnvLanes;
     EnvPicks in;
     EnvCells cells;
-    EnvTexels tex;
     Picked picked[K];
     float us[K], vs[K], ss[K];
     const bool closest = env.closest;
@@ -337,8 +333,7 @@ void environment_sample_lanes(const EnvironmentMap& env, const float* u1, const 
             for (size_t k = 0; k < c; ++k) keep_inside(env, picked[k], us[k], vs[k]);
         equirect_dir_lanes(env.to_map, us, vs, c, wi + k0, wi + stride + k0, wi + 2 * stride + k0, ss);
         if (blends_in_lanes(env)) {
-            fill_texels_lanes(env, us, vs, ss, c, cells, tex);
-            env_blend_lanes(tex, c, true, true, value + k0, stride, pdf + k0);
+            blend_places(env, us, vs, ss, c, cells, true, true, value + k0, stride, pdf + k0);
             continue;
         }
         for (size_t k = 0; k < c; ++k) {

@@ -1,4 +1,4 @@
-// equirect_uv_lanes, equirect_dir_lanes and env_place_lanes (envlanes.h), compiled per
+// equirect_uv_lanes, equirect_dir_lanes, env_place_lanes and env_cell_lanes (envlanes.h), compiled per
 // instruction set as named copies (as noise.cpp) so that DACRT_ISA can pick a narrower one
 // (dispatch.h lane_copy) and tests compare them on one machine. Compiled
 // with -fno-trapping-math (CMakeLists.txt) so equirect.h's selects vectorise; -ffp-contract=off:
@@ -20,7 +20,6 @@ using UvFn = void (*)(const float*, const float*, const float*, const float*, si
 using DirFn = void (*)(const float*, const float*, const float*, size_t, float*, float*, float*, float*);
 using PlaceFn = void (*)(bool, float, float, const EnvPicks&, size_t, float*, float*);
 using CellFn = void (*)(uint32_t, uint32_t, const float*, const float*, const float*, size_t, EnvCells&);
-using BlendFn = void (*)(const EnvTexels&, size_t, bool, bool, float*, size_t, float*);
 
 #define DACRT_EQUIRECT_ISA(NAME, TARGET)                                                                     \
     TARGET void NAME##_uv(const float* __restrict M, const float* __restrict dx, const float* __restrict dy,  \
@@ -78,21 +77,6 @@ using BlendFn = void (*)(const EnvTexels&, size_t, bool, bool, float*, size_t, f
             c.i0[k] = uint32_t(i < 0 ? i + ih : i), c.i1[k] = uint32_t(i + 1 == ih ? 0 : i + 1);              \
             c.ok[k] = in;                                                                                     \
         }                                                                                                     \
-    }                                                                                                         \
-    TARGET void NAME##_blend(const EnvTexels& t, size_t m, bool has_pdf, bool divide, float* __restrict out,    \
-                             size_t stride, float* __restrict pdf) {                                          \
-        for (size_t k = 0; k < m; ++k) {                                                                      \
-            const float fx = t.fx[k], fy = t.fy[k];                                                           \
-            const float bl = envcell::bilerp(t.lum[0][k], t.lum[1][k], t.lum[2][k], t.lum[3][k], fx, fy);      \
-            pdf[k] = has_pdf && t.s[k] > 0 ? t.cell[k] * bl * envcell::INV_2PI2 / t.s[k] : 0.0f;              \
-        }                                                                                                     \
-        for (int a = 0; a < 3; ++a)                                                                           \
-            for (size_t k = 0; k < m; ++k) {                                                                  \
-                const float le = envcell::finite_or_0(                                                                \
-                    envcell::bilerp(t.rgb[0][a][k], t.rgb[1][a][k], t.rgb[2][a][k], t.rgb[3][a][k], t.fx[k], t.fy[k])); \
-                const float inv = pdf[k] > 0 ? 1.0f / pdf[k] : 0.0f;                                          \
-                out[a * stride + k] = divide ? le * inv : le;                                                 \
-            }                                                                                                 \
     }
 
 DACRT_EQUIRECT_ISA(portable, )
@@ -121,11 +105,6 @@ void env_place_lanes(bool closest, float fw, float fh, const EnvPicks& in, size_
 void env_cell_lanes(uint32_t w, uint32_t h, const float* u, const float* v, const float* s, size_t m, EnvCells& c) {
     static const CellFn fn = lane_copy<CellFn>(portable_cells, avx2_cells, avx512_cells);
     fn(w, h, u, v, s, m, c);
-}
-
-void env_blend_lanes(const EnvTexels& t, size_t m, bool has_pdf, bool divide, float* out, size_t stride, float* pdf) {
-    static const BlendFn fn = lane_copy<BlendFn>(portable_blend, avx2_blend, avx512_blend);
-    fn(t, m, has_pdf, divide, out, stride, pdf);
 }
 
 }  // namespace dacrt

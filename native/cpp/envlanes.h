@@ -27,15 +27,6 @@ struct EnvPicks {
 // (envcell.h: the uniforms' fractions, then 'Closest' or 'Linear').
 void env_place_lanes(bool closest, float fw, float fh, const EnvPicks& in, size_t m, float* u, float* v);
 
-// What a 'Linear' lookup and pdf read at up to kEnvLanes places k: the place (fx, fy) in the cell
-// between texel centres, sin(theta) s, the cell's pdf factor, its corners' luminances and
-// colours (corner 0: (i, j), 1: (i, j+1), 2: (i+1, j), 3: (i+1, j+1)).
-struct EnvTexels {
-    float fx[kEnvLanes], fy[kEnvLanes], s[kEnvLanes], cell[kEnvLanes];
-    float lum[4][kEnvLanes];
-    float rgb[4][3][kEnvLanes];
-};
-
 // The cells between texel centres where a 'Linear' lookup at up to kEnvLanes places k reads
 // (environment.cpp's cell_of): the place (fx, fy) in the cell, its rows i0, i1 = i0 + 1 and
 // columns j0, j1 = j0 + 1 (wrapped), and ok where the place has a direction (sin(theta) >= 0)
@@ -49,11 +40,6 @@ struct EnvCells {
 // For k < m: the cells of a w x h map's places (u, v)[k] with sin(theta) s[k], in cell_of's
 // operations (the same bits).
 void env_cell_lanes(uint32_t w, uint32_t h, const float* u, const float* v, const float* s, size_t m, EnvCells& c);
-
-// For k < m: the blends of t (environment.cpp's lookup and uv_pdf): the solid-angle pdf[k] (0
-// without has_pdf or where s <= 0) and the radiance, or with divide radiance / pdf (0 where the
-// pdf is 0), into out[a * stride + k].
-void env_blend_lanes(const EnvTexels& t, size_t m, bool has_pdf, bool divide, float* out, size_t stride, float* pdf);
 
 // For j < m: the world direction of (u, v)[j] (from_uv, turned back by to_map's transpose) into
 // wx, wy, wz and its sin(theta), in environment_sample's operations (the same bits).

@@ -153,6 +153,74 @@ def test_gather_matches_eval(closest):
     assert not L[:, ~miss].any()
 
 
+def _seam_and_centre_directions(rng, w, h, n):
+    """(3, n) unit float32 directions whose (u, v) fall on texel centres and edges (the cells'
+    floor steps), the u = 0 / 1 seam and the poles, beside _directions' set."""
+    j = rng.integers(0, 2 * w + 1, n) / (2.0 * w)     # centres and edges of the columns
+    i = rng.integers(0, 2 * h + 1, n) / (2.0 * h)
+    phi, theta = np.pi * (1 - 2 * j), np.pi * (1 - i)
+    d = np.stack([-np.sin(theta) * np.cos(phi), np.sin(theta) * np.sin(phi), -np.cos(theta)]).astype(F32)
+    return d
+
+
+@pytest.mark.parametrize("interpolation", ["Linear", "Closest"])
+def test_bsdf_gather_weighs_eval_by_the_power_heuristic(interpolation):
+    """BSDF rays' environment_gather (prob > 0: the pdf's blend, thr, MIS) adds, bit for bit,
+    eval's radiance weighed by 1 / (1 + (prob pdf / pdf_bsdf)^2) in float32 and times thr, with
+    the directions at texel centres and edges, the seam, the poles, zero and NaN vectors among them
+    (eval looks each up point by point; the gather finds the cells lane by lane)."""
+    import dacrt.lamps as lamps
+    rng = np.random.default_rng(17)
+    h, w = 12, 24
+    rgb = (rng.random((h, w, 3)) ** 3).astype(F32) * 3
+    rgb[3, 5] = 0.0                                     # a black texel: cells of zero pdf
+    env = lamps.environment_map(rgb, _rotation(rng), interpolation)
+    D = np.concatenate([_directions(rng, 1500), _seam_and_centre_directions(rng, w, h, 1500)], axis=1)
+    D = np.ascontiguousarray(D[:, rng.permutation(D.shape[1])])
+    D[:, 7] = np.nan
+    n = D.shape[1]
+    miss = rng.random(n) < 0.7
+    thr = rng.uniform(0.1, 1, (3, n)).astype(F32)
+    pb = rng.uniform(0.05, 2, n).astype(F32)
+    prob = F32(0.375)
+    Le, pdf = env.eval(D)
+    L = np.zeros((3, n), F32)
+    env.gather(float(prob), D, miss, thr, pb, np.arange(n, dtype=np.int64), L)
+    x = prob * pdf / pb
+    x = x * x
+    want = Le * (F32(1) / (F32(1) + x)) * thr
+    np.testing.assert_array_equal(L[:, miss].view(np.uint32), want[:, miss].view(np.uint32))
+    assert not L[:, ~miss].any()
+    assert (pdf[miss] > 0).any() and (pdf[miss] == 0).any()
+
+
+_ISA_GATHER_RUN = """
+import sys
+import numpy as np
+import dacrt.lamps as lamps
+rgb, D, u = (np.load(a) for a in sys.argv[1:4])
+n = D.shape[1]
+env = lamps.environment_map(rgb, None, "Linear")
+L = np.zeros((3, n), np.float32)
+env.gather(0.5, D, np.ones(n, bool), None, np.full(n, 0.7, np.float32), np.arange(n, dtype=np.int64), L)
+wi, value, pdf = env.sample_lanes(u[0], u[1])
+np.save(sys.argv[4], np.concatenate([a.ravel() for a in (L, wi, value, pdf)]))
+"""
+
+
+def test_gather_and_samples_give_the_same_bits_on_every_isa():
+    """The cells of a 'Linear' map's lookups (env_cell_lanes) and the places of its samples give
+    the same gathered radiance and the same samples from every instruction set."""
+    rng = np.random.default_rng(19)
+    rgb = (rng.random((24, 48, 3)) ** 4).astype(F32) * 2
+    D = np.concatenate([_directions(rng, 2000), _seam_and_centre_directions(rng, 48, 24, 2001)], axis=1)
+    u = rng.random((2, 4099)).astype(F32)
+    out = outputs_per_isa(_ISA_GATHER_RUN, rgb, np.ascontiguousarray(D), u)
+    first = out.pop('portable')
+    for isa, got in out.items():
+        np.testing.assert_array_equal(got.view(np.uint32), first.view(np.uint32), err_msg=isa)
+
+
 @pytest.mark.parametrize("closest", [True, False])
 def test_samples_land_where_the_map_has_weight(closest):
     """The guided CDF searches (a bucket's entries counted, or a binary search in a long one)
