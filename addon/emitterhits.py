@@ -94,7 +94,9 @@ class EmitterHits:
         the sun and the world where the ray misses everything; MIS-weighted for BSDF rays.
         One native pass over the rays for all lamps (dacrt.lamps.lamp_gather); with light
         passes, camera rays' emitters and world go to their two passes; with light groups,
-        each group's lamps (and the world) again into its own array."""
+        each group's lamps (and the world) again into its own array. hit None: no flags, where
+        no gather here reads them (Integrator._flags_unread: BSDF rays with no lamp at infinity,
+        no world, or camera rays that see no lamp or world)."""
         camera, classes = k == 0, self._found_classes(k, path)
         L, L_env = sinks.found(k), sinks.world(k)
         bounce = not camera and self._bounce_worlds is not None
@@ -116,7 +118,7 @@ class EmitterHits:
         if sinks.groups and combined_env is not None and self._world_group >= 0:
             envs.append((combined_env, sinks.groups[self._world_group]))
         groups = [(lamps, out) for lamps, out in groups if len(lamps)] + self._group_lamps(camera, sinks)
-        miss = ~hit
+        miss = None if hit is None else ~hit
         # camera rays past glass see the map by the world's Transmission visibility (_env_apart)
         past = path.transmit if camera and self._env_apart and path.transmit is not None else None
         for (e, out), (thr, clamp) in itertools.product(envs, classes):

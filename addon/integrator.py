@@ -388,6 +388,7 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
         self._rays = {'camera': 0, 'bounce': 0, 'shadow': 0}
         self._skipped_shadow = 0        # light samples that could not contribute: no ray traced
         self._fused_scene = None        # whether diffuse vertices may take one native pass (_fused)
+        self._bare_scene = None         # whether vertices may go without hit flags (_flags_unread)
         self._rough_fused = None        # _fused_rough's arrays, made once
         self._samples_skipped = 0       # (pixel, sample) paths adaptive sampling did not take
         # bounce rays not traced, by reason: the surface is black, Russian roulette, the last
@@ -991,6 +992,8 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
         camera = k == 0
         hits = self._intersect('camera', path.O, path.D, path.tmax, path.prim, path.rays) if camera \
             else self._intersect_bounce(k, path)
+        if self._flags_unread(camera, path, sinks, k):
+            return self._bare_vertex(k, path, hits, sinks)
         prim = hits['prim']
         hit = prim >= 0
         self._gather_lamps(path, hit, hits, sinks, k)
@@ -1180,6 +1183,36 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
                       N=ns,
                       dark_pdf=None if nee is None else (pdf * nee).astype(F32))
 
+    def _flags_unread(self, camera, path, sinks, k):
+        """Whether vertex k of these paths reads the hit flags (prim >= 0) nowhere but in the
+        fused pass (_diffuse_vertex), which reads prim itself: no transparency, emissive
+        triangles, translucent bounce limits, shadow linking, bounce worlds, world or lamp at
+        infinity for BSDF rays (their gather reads which rays missed); for camera rays also an
+        opaque film without holdouts, data or light passes, and no lamp or world they see. The
+        flags had been a read of the 16-byte hit records on the calling thread at every vertex
+        (numpy's INT_greater_equal, ~1% of a Cornell render's CPU)."""
+        if self._bare_scene is None:
+            self._bare_scene = bool(
+                not self._any_transparent and not self._any_emissive and not self._translucent_apart
+                and not len(self._bsdf_linked) and not len(self._linked_tri_sets) and self._bounce_worlds is None
+                and self.lights.environment is None
+                and not any(self._record_lamps[j].at_infinity for j in self._bsdf_lamps))
+        if not self._bare_scene or path.dead is not None or path.xb is not None or not self._fused(path, sinks, k):
+            return False
+        return not camera or (self._all_opaque and not self._data_passes and not sinks.split
+                              and not len(self._camera_lamps) and self._camera_env is None)
+
+    def _bare_vertex(self, k, path, hits, sinks):
+        """_vertex where _flags_unread: the lamps gathered without flags, then (before the last
+        segment's end) _diffuse_vertex with hit None, whose pass takes the records with prim >= 0
+        as the hits; where none is, it keeps no path, as _vertex's early return. The same
+        numbers as _vertex's steps."""
+        self._gather_lamps(path, None, hits, sinks, k)
+        if k == self.max_bounces + 1:
+            return None
+        return self._diffuse_vertex(k, path, hits, None, sinks,
+                                    draw=(self.lights.num_entries > 1, k >= ROULETTE_FROM))
+
     def _radial_normals(self, prim, ng, ns, D):
         """ng and ns (3, k), in place, of the hits on point-cloud spheres (tri.unbumped): Cycles'
         point_shader_setup, Ng = N = normalize(P - centre), the interpolated radial normal here,
@@ -1218,8 +1251,8 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
         """_vertex's shading of vertex k (survival, light sampling, the bounce) in one native
         pass (dacrt.shading.shade_bounce), the same numbers as its general steps; then the
         shadow rays. draw = (pick, roulette): the pass draws those uniforms of dimension pair
-        dim(k, 0) from the keys (uniform_pick's) instead of taking u_pick and u_rr. Returns the
-        paths that go on."""
+        dim(k, 0) from the keys (uniform_pick's) instead of taking u_pick and u_rr. hit None: the
+        records with prim >= 0 are the hits (_bare_vertex). Returns the paths that go on."""
         last = k == self.max_bounces and not self.lights.seen_by_bsdf and SKIP_WORK
         t = self.tri
         words = (*self.rng.dim_words(dim(k, 0)), *draw) if draw is not None and any(draw) else None

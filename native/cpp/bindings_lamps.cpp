@@ -229,7 +229,7 @@ std::shared_ptr<LightTree> make_tree(F32Array lo, F32Array hi, F32Array axis, F3
 }
 
 void lamp_gather_py(F32Array records, I32Array lamps, py::object lamp_prob, F32Array O, F32Array D,
-                    py::array_t<float> t_surf, py::array_t<bool, py::array::c_style> miss, py::object thr,
+                    py::array_t<float> t_surf, py::object miss, py::object thr,
                     py::object pdf_bsdf, I64Array pid, py::array L, float clamp, py::object tree, py::object lamp_key,
                     py::object normal, py::object receivers) {
     check_clamp(clamp);
@@ -257,7 +257,20 @@ void lamp_gather_py(F32Array records, I32Array lamps, py::object lamp_prob, F32A
     if (!aligned || !(n < 2 || (t_bytes > 0 && t_bytes % py::ssize_t(sizeof(float)) == 0)))
         t_surf = py::array_t<float, py::array::c_style>::ensure(t_surf);
     const size_t t_step = n < 2 ? 1 : size_t(t_surf.strides(0)) / sizeof(float);
-    need_shape(miss, 0, n, "miss");
+    // miss is read for the lamps at infinity alone: without one it may be None (the caller
+    // then makes no flags from the hit records)
+    py::array_t<bool, py::array::c_style> miss_keep;
+    if (!miss.is_none()) {
+        miss_keep = miss.cast<py::array_t<bool, py::array::c_style>>();
+        need_shape(miss_keep, 0, n, "miss");
+    } else {
+        for (size_t k = 0; k < nl; ++k)
+            if (at_infinity(rec[lamp_list[k]]))
+                throw py::value_error("miss is None, but lamps[" + std::to_string(k) + "] = " +
+                                      std::to_string(lamp_list[k]) +
+                                      " is at infinity (a sun or the background): it needs which rays missed");
+    }
+    const uint8_t* missed = miss.is_none() ? nullptr : reinterpret_cast<const uint8_t*>(miss_keep.data());
     need_shape(pid, 0, n, "pid");
     F32Array prob_keep, thr_keep, pdf_keep;
     const float* prob = optional_f32(lamp_prob, 0, R, "lamp_prob", prob_keep);
@@ -271,7 +284,7 @@ void lamp_gather_py(F32Array records, I32Array lamps, py::object lamp_prob, F32A
     const uint64_t* recv = optional_receivers(receivers, n, recv_keep);
     gather_into(L, pid, n, [&](float* out, size_t N) {
         lamp_gather(rec, lamp_list.data(), nl, prob, O.data(), D.data(), t_surf.data(),
-                    reinterpret_cast<const uint8_t*>(miss.data()), t, pb, pid.data(), n, out, N, clamp, lt,
+                    missed, t, pb, pid.data(), n, out, N, clamp, lt,
                     lt ? key_keep.data() : nullptr, nv, recv, t_step);
     });
 }
@@ -540,7 +553,7 @@ py::tuple next_event_py(F32Array records, py::array_t<double, py::array::c_style
 py::tuple shade_bounce_py(F32Array records, py::array_t<double, py::array::c_style> cdf, F32Array prob,
                           py::array_t<bool, py::array::c_style> no_mis, py::array_t<bool, py::array::c_style> shadow,
                           py::object tri_geo, py::object tri_area, py::object tri_emission, py::object env,
-                          py::object tree, py::object tri_prim, py::array hits, py::array_t<bool, py::array::c_style> hit,
+                          py::object tree, py::object tri_prim, py::array hits, py::object hit,
                           py::array_t<bool, py::array::c_style> live, F32Array albedo, py::object thr, py::object u_rr,
                           F32Array geo, py::object normals, F32Array D, I64Array pid,
                           py::array_t<uint32_t, py::array::c_style> keys, py::object pick, uint32_t nee_ka,
@@ -564,8 +577,12 @@ py::tuple shade_bounce_py(F32Array records, py::array_t<double, py::array::c_sty
         throw py::value_error("hits must be a contiguous (n,) array of " + std::to_string(sizeof(Hit)) +
                               "-byte records");
     in.hits = static_cast<const Hit*>(hits.data());
-    need_shape(hit, 0, n, "hit");
-    in.hit = reinterpret_cast<const uint8_t*>(hit.data());
+    py::array_t<bool, py::array::c_style> hit_keep;
+    if (!hit.is_none()) {  // (None: the hits are the records with prim >= 0, read in the pass)
+        hit_keep = hit.cast<py::array_t<bool, py::array::c_style>>();
+        need_shape(hit_keep, 0, n, "hit");
+        in.hit = reinterpret_cast<const uint8_t*>(hit_keep.data());
+    }
     if (live.ndim() != 1) throw py::value_error("live must be one-dimensional");
     in.M = size_t(live.shape(0));
     in.live = reinterpret_cast<const uint8_t*>(live.data());

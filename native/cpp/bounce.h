@@ -14,7 +14,8 @@
 namespace dacrt {
 
 // The paths arriving at the vertex (n) and what shades them. hits, hit, live, albedo, thr and
-// u_rr as survivors() and survivor_throughput() take them (u_rr null: no roulette); geo,
+// u_rr as survivors() and survivor_throughput() take them (hit null: the records' prim >= 0;
+// u_rr null: no roulette); geo,
 // normals (null: flat) and D as surface(); pid, keys and pick (null: none) the path columns
 // the survivors keep; (nee_ka, nee_kb) the light sample's dimension words; with scatter,
 // (ka, kb) the bounce direction's.

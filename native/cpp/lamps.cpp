@@ -137,7 +137,7 @@ void gather_range_boxes(Gather g, const LampBoxes& boxes, uint64_t infinity, siz
         if (!boxes.empty()) boxes.meets(g.O, g.D, g.t_surf, g.t_step, g.n, i0, count, cand);
         for (size_t q = 0; q < count; ++q) {
             const size_t i = i0 + q;
-            for (uint64_t c = cand[q] | (g.miss[i] ? infinity : 0); c; c &= c - 1) {
+            for (uint64_t c = cand[q] | (infinity && g.miss[i] ? infinity : 0); c; c &= c - 1) {
                 const size_t k = size_t(__builtin_ctzll(c));
                 const LampRecord& lamp = g.rec[g.lamps[k]];
                 gather_one(g, lamp, at_infinity(lamp), tree_key(g, k), k, i);
@@ -157,7 +157,7 @@ void gather_range_bvh(Gather g, const LampBVH& bvh, const std::vector<int32_t>& 
         const float o[3] = {g.O[i], g.O[g.n + i], g.O[2 * g.n + i]};
         const float d[3] = {g.D[i], g.D[g.n + i], g.D[2 * g.n + i]};
         bvh.visit(o, d, g.t_surf[i * g.t_step], cand);
-        if (g.miss[i]) cand.insert(cand.end(), infinite.begin(), infinite.end());
+        if (!infinite.empty() && g.miss[i]) cand.insert(cand.end(), infinite.begin(), infinite.end());
         std::sort(cand.begin(), cand.end());
         for (int32_t k : cand) {
             const LampRecord& lamp = g.rec[g.lamps[k]];

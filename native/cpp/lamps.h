@@ -78,7 +78,8 @@ void lamp_sample(const LampRecord* rec, size_t R, const int32_t* entry, const fl
                  const float* u2, size_t n, float* wi, float* dist, float* value, float* pdf);
 
 // What rays (O, D: 3 rows, stride n) see of the lamps rec[lamps[0..nl)]: a finite lamp where
-// it is met at t < t_surf[i * t_step], a lamp at infinity where miss[i]. L[:, pid[i]] (stride N) +=
+// it is met at t < t_surf[i * t_step], a lamp at infinity where miss[i] (miss, read for those
+// alone, may be null when no lamp is at infinity). L[:, pid[i]] (stride N) +=
 // thr x radiance x w, lamp by lamp in list order, with thr null = 1 and w = 1 when lamp_prob
 // is null (camera rays), else the power heuristic 1 / (1 + (lamp_prob[j] pdf_l / pdf_bsdf)^2).
 // With a light tree, a record j with lamp_key[j] >= 0 is that member of it: its selection

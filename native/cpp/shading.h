@@ -216,7 +216,8 @@ void block_samples(const int64_t* pixels, size_t npix, int64_t s0, size_t ns, in
 
 namespace dacrt {
 
-// Which paths go on after a vertex: those whose ray hit (hit[i]) a triangle with live[prim] set
+// Which paths go on after a vertex: those whose ray hit (hit[i]; hit null: every record with
+// prim >= 0, which the pass reads anyway, so the caller makes no flag array) a triangle with live[prim] set
 // (not black) and, when u_rr is given, survive Russian roulette with probability
 // q = min(sqrt(max channel of thr), 1) (thr null: 1). Writes their indices to idx (sized n) and
 // returns how many; dead_black / dead_rr: paths ended by each reason.

@@ -47,7 +47,8 @@ size_t survivors_of(const Hit* hits, const uint8_t* hit, size_t n, const uint8_t
             // branch-free per path (hits, black surfaces and roulette follow no pattern); the
             // triangle index is clamped before live[] is read
             const int32_t p = __atomic_load_n(&H[i].prim, __ATOMIC_RELAXED);
-            const bool on = (on_hit[i] != 0) & (p >= 0) & (size_t(p) < tri);
+            // (no flags: every path whose record holds a triangle, prim >= 0, is a hit)
+            const bool on = (!on_hit || on_hit[i] != 0) & (p >= 0) & (size_t(p) < tri);
             const bool alive = on & (on_live[on ? size_t(p) : 0] != 0);
             const bool lucky = !rl || u_rr < survival(T, paths, i);
             nb += on & !alive;

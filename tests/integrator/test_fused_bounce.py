@@ -9,7 +9,7 @@ import dacrt
 import addon.integrator as integrator_module
 
 from .scenes import (ALL_VIS, cornell_box, geometry, icosphere, light, material, ortho_down, plane_scene, render,
-                     translation)
+                     rotation_x, translation)
 
 
 def _both(scene, monkeypatch):
@@ -99,3 +99,42 @@ def test_bounces_a_coarse_smooth_sphere_sends_below_its_surface_are_dropped_bit_
     assert fused.stats['skipped']['detail']['bounce_rays_below_surface'] == \
         general.stats['skipped']['detail']['bounce_rays_below_surface'] == sum(drops)
     _same(fused, general)
+
+
+def _with_flags(scene, monkeypatch):
+    """(rendered, rendered with the hit flags made at every vertex) and the vertices (k) that
+    went without them in the first."""
+    bare = set()
+    unread = integrator_module.Integrator._flags_unread
+
+    def counted(self, camera, path, sinks, k):
+        if not unread(self, camera, path, sinks, k):
+            return False
+        bare.add(k)
+        return True
+    monkeypatch.setattr(integrator_module.Integrator, '_flags_unread', counted)
+    flagless = render(scene)
+    monkeypatch.setattr(integrator_module.Integrator, '_flags_unread', lambda self, *a: False)
+    return flagless, render(scene), bare
+
+
+@pytest.mark.parametrize('extra', ['none', 'point', 'sun', 'world', 'camera_lamp'])
+def test_vertices_without_hit_flags_are_bit_identical(monkeypatch, extra):
+    """Where nothing but the fused pass reads the hit flags (prim >= 0), none are made: the pass
+    takes the records with a triangle as the hits, the lamp gather goes without misses. The
+    image, ray counts and ended paths bit for bit those of the flags made; a sun or a world
+    (which the rays that missed see) or a lamp the camera sees keeps them (at the camera vertex
+    or at all), and renders alike too."""
+    scene = cornell_box(40, 30, 16, 4, area_light=True)
+    scene.lights[0].visible_camera = extra == 'camera_lamp'    # (Blender's default: unseen)
+    if extra == 'point':
+        scene.lights.append(light('POINT', 5.0, translation(0.2, 0.3, 0.7)))
+    elif extra == 'sun':
+        scene.lights.append(light('SUN', 2.0, rotation_x(-1.2), angle=0.1))
+    elif extra == 'world':
+        scene.world = np.array([0.3, 0.4, 0.5], np.float32)
+    flagless, flagged, bare = _with_flags(scene, monkeypatch)
+    # the camera vertex, 4 bounces and the last segment's end (K + 1: lamps gathered only)
+    assert bare == {'none': set(range(6)), 'point': set(range(6)), 'camera_lamp': set(range(1, 6))}.get(extra, set())
+    _same(flagless, flagged)
+    assert flagless.film.combined()[..., :3].mean() > 0

@@ -590,3 +590,41 @@ def test_lamp_gather_checks_pids_at_every_place_and_length():
                 L3 = np.zeros((3, N), F32)
                 gather(rec, [0], P, D, t, miss, down, L3)
                 assert np.array_equal(L3, L)
+
+
+@pytest.mark.parametrize('count', [1, 40, 100])
+@pytest.mark.parametrize('bsdf', [False, True])
+def test_gather_without_miss_flags_where_no_lamp_is_at_infinity(count, bsdf):
+    """miss is read for the lamps at infinity alone, so a list without any may go without it
+    (None: the integrator then makes no flags from its hit records): every sum bit for bit the
+    one with flags given, through each of the gather's forms (one area lamp's lanes, boxes of
+    up to 64 lamps, the BVH beyond). A list with a sun or the world still needs them: a
+    clear error, the film untouched."""
+    rng = np.random.default_rng(count + 7 * bsdf)
+    lamps = [lamp for lamp in many_lamps(rng, 3 * count) if not lamp.at_infinity][:count]
+    if count == 1:                            # (an area lamp: the lanes)
+        lamps = [make('area_rectangle')]
+    assert len(lamps) == count
+    rec = lamp_records(lamps)
+    n, N = 20_000, 25_000
+    O, D, t_surf, miss = rays_at_lamps(rng, lamps, n)
+    pid = rng.permutation(N)[:n]
+    kw = {}
+    if bsdf:
+        kw = dict(thr=rng.uniform(0.1, 2.0, (3, n)).astype(F32), pdf_bsdf=rng.uniform(0.01, 1.0, n).astype(F32),
+                  lamp_prob=rng.uniform(0.05, 1.0, count).astype(F32))
+    L0 = rng.uniform(0.0, 1.0, (3, N)).astype(F32)
+    given, flagless = L0.copy(), L0.copy()
+    listed = np.arange(count, dtype=np.int32)
+    dacrt.lamps.lamp_gather(rec, listed, O, D, t_surf, miss, pid, given, **kw)
+    dacrt.lamps.lamp_gather(rec, listed, O, D, t_surf, None, pid, flagless, **kw)
+    assert (given != L0).any(axis=0).sum() > 50, 'too few rays see a lamp to test it'
+    assert given.tobytes() == flagless.tobytes()
+    for far in ('sun_angle', 'background'):
+        with_far = lamp_records(lamps + [make(far)])
+        if bsdf:
+            kw['lamp_prob'] = rng.uniform(0.05, 1.0, count + 1).astype(F32)
+        L = L0.copy()
+        with pytest.raises(ValueError, match=rf'miss is None, but lamps\[{count}\] = {count} is at infinity'):
+            dacrt.lamps.lamp_gather(with_far, np.arange(count + 1), O, D, t_surf, None, pid, L, **kw)
+        assert L.tobytes() == L0.tobytes()

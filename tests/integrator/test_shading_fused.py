@@ -126,6 +126,30 @@ def test_shade_bounce_draws_uniform_picks_uniforms(n, pick, roulette):
                              draw=(ka, kb, pick, roulette))
 
 
+@pytest.mark.parametrize('n', [0, 7, 3 * BLOCK + 1234])
+@pytest.mark.parametrize('drawn', [False, True])
+def test_shade_bounce_without_flags_takes_the_records_with_a_triangle(n, drawn):
+    """hit None: the paths whose record holds a triangle (prim >= 0) are the hits, as the
+    integrator's flags prim >= 0 had said (it now makes none where nothing else reads them):
+    every output bit the same, with the roulette and pick uniforms given or drawn; all missed,
+    nothing shaded."""
+    rng = np.random.default_rng(n + 5 * drawn)
+    lc = _lights(rng, lamps=True, triangles=True)
+    x = _bounce_inputs(rng, n, roulette=not drawn, pick=not drawn)
+    draw = dict(draw=(0x9E3779B9, 77, True, True)) if drawn else {}
+    for missed in (False, True):
+        hits = x['hits'].copy()
+        if missed:
+            hits['prim'] = -1
+        args = lambda hit: (lc, hits, hit, x['live'], x['albedo'], x['thr'], x['u_rr'], x['geo'], x['normals'],
+                            x['D'], x['pid'], x['keys'], x['pick'], (11, 12), SHORTEN, True, (21, 22))
+        flagged = shading.shade_bounce(*args(hits['prim'] >= 0), **draw)
+        _equal(shading.shade_bounce(*args(None), **draw), flagged)
+        if n > BLOCK and not missed:
+            assert len(flagged[2][3]) > n // 3
+    assert len(flagged[2][3]) == 0
+
+
 def test_all_paths_dead():
     """Every ray missed or ended: nothing shaded, empty outputs of the right kinds."""
     rng = np.random.default_rng(9)

@@ -348,6 +348,28 @@ def test_continue_paths_matches_numpy(roulette, with_thr):
         shading.continue_paths(hits, hit, live, albedo[:, :-1])
 
 
+@pytest.mark.parametrize("n", [0, 1, 8191, 16384, 16385, 100_001])
+@pytest.mark.parametrize("dead", ["none", "first_half", "second_half", "all", "random"])
+def test_survivors_are_listed_in_order_across_the_threads_ranges(n, dead):
+    """The survivors in ascending order, whichever thread's range holds none or all of them, at
+    sizes around the two-thread split (2 x 8192 paths) and odd ones, against numpy."""
+    rng = np.random.default_rng(n + len(dead))
+    m = 30
+    hits = np.zeros(n, dacrt.HIT_DTYPE)
+    hits["prim"] = rng.integers(0, m, n)
+    on = {"none": np.ones(n, bool), "all": np.zeros(n, bool), "random": rng.random(n) < 0.5,
+          "first_half": np.arange(n) >= n // 2, "second_half": np.arange(n) < n // 2}[dead]
+    hits["prim"][~on] = -1
+    live = np.ones(m, bool)
+    live[3] = False
+    albedo = rng.random((3, m)).astype(F32)
+    idx, out, black, rr = shading.continue_paths(hits, hits["prim"] >= 0, live, albedo, None, None)
+    keep = on & live[np.maximum(hits["prim"], 0)]
+    np.testing.assert_array_equal(idx, np.flatnonzero(keep))
+    assert (black, rr) == (np.count_nonzero(on & ~keep), 0)
+    np.testing.assert_array_equal(out, albedo[:, hits["prim"][idx]])
+
+
 @pytest.mark.parametrize("smooth", [False, True])
 def test_continue_paths_gives_survivors_surface_and_columns_in_one_pass(smooth):
     """surface= and take= give exactly what surface() and take_columns() give for the

@@ -92,7 +92,8 @@ def lamp_gather(records, lamps, O, D, t_surf, miss, pid, L, thr=None, pdf_bsdf=N
     records[lamps] (lamps: record indices, in the order their light is added).
 
     A finite lamp counts where the ray meets it at t < t_surf (n,) (the surface hit, or the
-    ray's length); a lamp at infinity (sun, background) counts where miss (n,) bool is set.
+    ray's length); a lamp at infinity (sun, background) counts where miss (n,) bool is set
+    (miss may be None where no lamp is at infinity: nothing else reads it).
     Lamps are not geometry: a ray collects every lamp it passes. L[:, pid[i]] += thr x Le x w
     (pid (n,) distinct column indices; thr (3, n) path throughput or None = 1). For BSDF rays
     give lamp_prob (R,) (each record's light-selection probability) and pdf_bsdf (n,): w is the
@@ -115,12 +116,13 @@ def lamp_gather(records, lamps, O, D, t_surf, miss, pid, L, thr=None, pdf_bsdf=N
     pid = np.asarray(pid)
     if pid.dtype.kind not in "iu":
         raise ValueError(f"pid must be an integer array of columns of L, got dtype {pid.dtype}")
-    miss = np.asarray(miss)
-    if miss.dtype != np.bool_:
+    miss = None if miss is None else np.asarray(miss)
+    if miss is not None and miss.dtype != np.bool_:
         raise ValueError(f"miss must be a bool array, got dtype {miss.dtype}")
     opt = lambda a: None if a is None else _f32(a)
     _core.lamp_gather(records, np.ascontiguousarray(lamps, np.int32), opt(lamp_prob), _f32(O), _f32(D), _f32_1d(t_surf),
-                      np.ascontiguousarray(miss), opt(thr), opt(pdf_bsdf), np.ascontiguousarray(pid, np.int64), L,
+                      None if miss is None else np.ascontiguousarray(miss), opt(thr), opt(pdf_bsdf),
+                      np.ascontiguousarray(pid, np.int64), L,
                       float(clamp), tree, None if lamp_key is None else np.ascontiguousarray(lamp_key, np.int32),
                       opt(N), None if receivers is None else np.ascontiguousarray(receivers, np.uint64))
 

@@ -412,7 +412,8 @@ def shade_bounce(lights: LightChoice, hits, hit, live, albedo, thr, u_rr, geo, n
     origins=P_off) of the survivors: the same bits as those three calls. rough = (materials
     (M,) of the triangles, params (4, m), colours (3, m)) or None: rough diffuses, as
     rough_rows' table of the survivors in next_event's rough and rough_scale after the scatter.
-    records: hit_records(geo, normals) or None (as surface()).
+    records: hit_records(geo, normals) or None (as surface()). hit None: the hits are the records
+    with prim >= 0 (the pass reads prim anyway; the caller then makes no flags from them).
     draw = (ka, kb, pick, roulette) or None: the pass draws the uniforms uniform_pick(keys, ka,
     kb) gives, instead of taking them as arrays (u_rr and pick must then be None): with
     roulette its second as u_rr, with pick its first as the survivors' pick; the same bits,
@@ -432,7 +433,8 @@ def shade_bounce(lights: LightChoice, hits, hit, live, albedo, thr, u_rr, geo, n
     black, rr, paths, nee, bsdf = _core.shade_bounce(
         lights.records, lights.cdf, lights.prob, lights.no_mis, lights.shadow, lights.tri_geo, lights.tri_area,
         lights.tri_emission, lights.environment, lights.tree, lights.tri_prim, np.ascontiguousarray(hits),
-        np.ascontiguousarray(hit, np.bool_), np.ascontiguousarray(live, np.bool_), _rows(albedo, 3, "albedo"),
+        None if hit is None else np.ascontiguousarray(hit, np.bool_), np.ascontiguousarray(live, np.bool_),
+        _rows(albedo, 3, "albedo"),
         None if thr is None else _rows(thr, 3, "thr"), None if u_rr is None else np.ascontiguousarray(u_rr, _F32),
         _rows(geo, 15, "geo"), None if normals is None else _rows(normals, 9, "normals"), _rows(D, 3, "D"),
         np.ascontiguousarray(pid, np.int64), _rows(keys, 2, "keys", np.uint32),
