@@ -35,6 +35,17 @@ _AFFINE_VECTOR_MATH = {'ADD': (0, 1), 'SUBTRACT': (0, 1), 'MULTIPLY': (0, 1), 'D
                        'MULTIPLY_ADD': (0, 1, 2), 'SCALE': (0, 3), 'CROSS_PRODUCT': (0, 1)}
 
 
+class NonFiniteInput(str):
+    """The note that a Mapping or Texture Mapping input is NaN or infinite (a script's or
+    driver's): the chain computes with it as Cycles does (the texture after it reads NaN), so it
+    says what the input is, not that anything is approximated, and a reader that computes the
+    chain elsewhere (a lamp's texture, export/lampcoordinates) need not give it up for it."""
+
+
+def _nonfinite_note(text, value):
+    return NonFiniteInput(f"{text} is ({', '.join(f'{v:g}' for v in value)})")
+
+
 def _rotation(euler):
     """Blender's Euler XYZ rotation matrix (mathutils.Euler(..., 'XYZ').to_matrix())."""
     cx, cy, cz = np.cos(euler)
@@ -62,7 +73,7 @@ def _vector_input(node, name, default, reasons):
         reasons.append(f"Mapping {name} driven by nodes; its own value used")
     value = np.array(value, np.float64)
     if not np.isfinite(value).all():        # a script or driver's NaN or infinity
-        reasons.append(f"Mapping node '{node.name}' {name} is ({', '.join(f'{v:g}' for v in value)})")
+        reasons.append(_nonfinite_note(f"Mapping node '{node.name}' {name}", value))
     return value
 
 
@@ -232,7 +243,7 @@ def node_texture_mapping(node, reasons):
     scale = np.array(tm.scale, np.float64)
     for name, value in (('Location', loc), ('Rotation', rot), ('Scale', scale)):
         if not np.isfinite(value).all():
-            reasons.append(f"'{node.name}' Texture Mapping {name} is ({', '.join(f'{v:g}' for v in value)})")
+            reasons.append(_nonfinite_note(f"'{node.name}' Texture Mapping {name}", value))
     axes = (tm.mapping_x, tm.mapping_y, tm.mapping_z)
     if not loc.any() and not rot.any() and (scale == 1.0).all() and axes == ('X', 'Y', 'Z'):
         return None

@@ -13,6 +13,7 @@ Part of the export layer."""
 import numpy as np
 
 from .. import nodeeval
+from ..mapping import NonFiniteInput
 
 # procedural textures whose Vector reads coordinates Cycles' shader has at a lamp
 # (lamp_coordinates): one value over the lamp where they are constant there (measured: a
@@ -228,6 +229,8 @@ def texture_profile(surface, lamp, reasons, evaluate):
     coords[TEXCOORD_UV], coords['object'] = coords['uv'], coords['generated']
     values = np.broadcast_to(np.asarray(fn(coords), np.float64).reshape(-1, width)[:, :width], (len(d) * k, width))
     values = values.reshape(len(d), k, width).mean(axis=1)
+    nan = np.isnan(values)      # (a NaN Mapping input's: Cycles' emission there is NaN, which it drops)
+    values = np.where(nan, 0.0, values)
     if not np.isfinite(values).all():
         return None
     grey = width == 1 or np.ptp(values, axis=1).max() <= 1e-6 * (np.abs(values).max() + 1e-30)
@@ -254,7 +257,15 @@ def texture_profile(surface, lamp, reasons, evaluate):
     grid = (values @ weights).reshape(hh.shape)
     table = _without_clip_bias(grid)
     return f1, IESProfile(grid_h.astype(np.float32), grid_v.astype(np.float32),
-                          table.astype(np.float32)), runs[1][1] + _radius_note(disc) + _edge_note(grid, grid_v), runs[1][2]
+                          table.astype(np.float32)), runs[1][1] + _radius_note(disc) + _edge_note(grid, grid_v) + _nan_note(nan), runs[1][2]
+
+
+def _nan_note(nan):
+    """The note of a profile's NaN directions (texture_profile): dark there, as Cycles drops them."""
+    if not nan.any():
+        return []
+    return [f"the texture is NaN toward {nan.any(axis=1).mean():.0%} of directions, which emit nothing there, "
+            "as in Cycles"]
 
 
 def _spot_uv(d, spot_size):
@@ -427,8 +438,8 @@ def at_lamp_coordinates(node, out, depth, lamp):
         fn, vector, chain = procedurals.compile_node(node, out, depth)
     except (nodeeval.NotCompiled, AttributeError, KeyError, TypeError, ValueError):
         return None
-    if chain.frames - _OWN_FRAME or chain.reasons:
-        return None
+    if chain.frames - _OWN_FRAME or not all(isinstance(r, NonFiniteInput) for r in chain.reasons):
+        return None     # (a NaN Mapping input is computed with, as Cycles does: NaN, the lamp dark)
     directional = lamp.kind in _DIRECTIONAL and chain.needs <= _DIRECTIONAL[lamp.kind]
     width = min(len(out.default_value), 3) if out.type in ('RGBA', 'VECTOR') else 1
     if chain.needs - set(coords):

@@ -243,3 +243,23 @@ def test_sharp_profile_edges_are_said(said):
         return [t for t in said if "changes sharply within the 1-degree grid" in t]
     assert notes('point_checker_normal'), said
     assert not notes('point_noise_uv'), said
+
+
+@pytest.mark.parametrize('kind', ['AREA', 'POINT'])
+def test_lamp_texture_after_a_nan_mapping_is_dark_as_in_cycles(kind, tmp_path, said):
+    """A Mapping of a NaN Location (a script's or driver's) between the coordinate and a Noise:
+    Cycles' Noise computes NaN and the lamp emits nothing. The lamp's texture had been given up
+    for the note the NaN makes and stood at the Color's own value, said as not evaluated: the
+    floor lit at 0.40 where Cycles is black (fuzz, session 74). An area light's Normal is one
+    value over it, a point lamp's the direction profile (texture_profile)."""
+    sc = _scene(kind, 'ShaderNodeTexNoise', 'Normal', 'Color', 'Color', {'Scale': 3.0})
+    nt = sc.objects['Lamp'].data.node_tree
+    tex = next(n for n in nt.nodes if n.type == 'TEX_NOISE')
+    coords = next(n for n in nt.nodes if n.type == 'TEX_COORD')
+    mapping = nt.nodes.new('ShaderNodeMapping')
+    mapping.inputs['Location'].default_value = (float('nan'), 0.0, 0.0)
+    nt.links.new(coords.outputs['Normal'], mapping.inputs['Vector'])
+    nt.links.new(mapping.outputs[0], tex.inputs['Vector'])
+    sc.cycles.samples = sc.dacrt.samples = 4
+    assert_means_agree(sc, tmp_path, said, kind)
+    assert [t for t in said if "light 'Lamp'" in t and "NaN" in t], said
