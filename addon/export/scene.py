@@ -30,7 +30,7 @@ from .motion import MotionCheck, motion_blur_message
 from .placement import Placement
 from .aovs import shader_aovs
 from .sky import ground_seen_said
-from .settings import clamp_direct_said, cycles_glossy_messages, export_settings
+from .settings import clamp_direct_said, cycles_glossy_messages, export_settings, glossy_in_diffuse_passes
 from .strands import (StrandSource, hair_arrays, hair_systems, read_strands, strand_kind, tessellate,
                       triangle_count)
 from .usedindices import used_indices
@@ -266,6 +266,7 @@ class Exporter:
         self.skipped = {}         # reason -> {object names} (ordered)
         self.ignored = {}         # reason -> {object names}: rendered, without a feature Cycles has
         self._glossy_visibility = {}    # lights whose Glossy and Diffuse visibility differ (_light)
+        self._passes = ()               # the film's passes (settings.passes), for what they hold (_summarize)
         self._catchers = {}       # names of geometry objects flagged Shadow Catcher (_note_ignored_features)
         self.lights_approximated = {}   # what a light's node tree lacks -> {light names}
         self.drawn_over = []      # Grease Pencil objects: Blender draws them over the render
@@ -286,6 +287,7 @@ class Exporter:
         self._walk_instances()
         self._tessellate_strands()
         self._film_fits(camera, settings.passes)
+        self._passes = tuple(settings.passes)
         geometry = Assembly(self).geometry(uv_pass='UV' in settings.passes)
         self._see_through_strands()
         self._bumped_strands()
@@ -946,6 +948,13 @@ class Exporter:
             return True
         return any(self.materials.materials[k].glossy for k in used if 0 < k < len(self.materials.materials))
 
+    def _glossy_surfaces(self) -> list:
+        """The names (quoted, as said) of the rendered surfaces _glossy_as_diffuse looks for."""
+        mats = self.materials.materials
+        names = ["objects without a material (a Principled BSDF)"] if (self._used == 0).any() else []
+        return names + [f"'{mats[k].name}'" for k in dict.fromkeys(self._used.tolist())
+                        if 0 < k < len(mats) and mats[k].glossy]
+
     def _glossy_kinds(self, geometry):
         """(kinds, shadow_clear_glass) for settings.cycles_glossy_messages: the union of the
         rendered materials' glossy_kinds (material 0, Blender's default Principled of roughness
@@ -1031,6 +1040,9 @@ class Exporter:
         self.messages += cycles_glossy_messages(self.scene, *self._glossy_kinds(geometry),
                                                 max_bounces=int(getattr(getattr(self.scene, 'dacrt', None),
                                                                         'max_bounces', 0)))
+        said = glossy_in_diffuse_passes(self.view_layer.name, self._passes, self._glossy_surfaces())
+        if said:
+            self.messages.append(('WARNING', said))
         if approx:
             # (not "as diffuse": a reason may be about an emission's colour, which stays emission)
             self.messages.append(('WARNING', f"{count} material(s) approximated (DACRT renders diffuse "

@@ -288,6 +288,28 @@ def cycles_glossy_messages(scene, kinds, shadow_clear_glass, max_bounces):
     return out
 
 
+# the passes that hold a glossy closure rendered as diffuse here, where Cycles writes it to
+# its Glossy passes (not Denoising Albedo: Cycles' holds a rough glossy closure's albedo too)
+_DIFFUSE_PASSES = {'DiffCol': 'Diffuse Color', 'DiffDir': 'Diffuse Direct', 'DiffInd': 'Diffuse Indirect'}
+
+
+def glossy_in_diffuse_passes(layer, passes, surfaces):
+    """The warning that view layer `layer`'s Diffuse passes (of its film `passes`) hold the
+    glossy closures of `surfaces` (names, quoted) that DACRT renders as diffuse, or ''.
+    Measured: a cube of Principled base (0.6, 0.3, 0.2), roughness 0.4 and the default specular
+    layer, its Diffuse Color 1.12/1.24/1.36x Cycles' per channel (Cycles writes base x (1 - the
+    layer's albedo) there, DACRT the albedo with the layer's added); the material message alone
+    had said the layer was diffuse, not that the data passes follow it."""
+    held = [name for key, name in _DIFFUSE_PASSES.items() if key in passes]
+    if not held or not surfaces:
+        return ''
+    return (f"view layer '{layer}': {', '.join(held)} {'holds' if len(held) == 1 else 'hold'} the glossy layers and BSDFs rendered as diffuse "
+            f"here (a Principled's specular layer, metal, coat and glass; Glossy, Metallic and Glass BSDFs) of "
+            f"{', '.join(surfaces)}: Cycles writes those to its Glossy passes, so these differ from Cycles' "
+            f"(a Principled of base (0.6, 0.3, 0.2) and the default specular layer: Diffuse Color 1.1-1.4x "
+            f"Cycles')")
+
+
 def _shared_pass_text(layer, shared, hidden, aov_kinds):
     """What a view layer's result holds where a Shader AOV shares its name with a light group's
     or another pass (passes.result_passes), which Blender lets through (AOV.is_valid)."""
