@@ -407,6 +407,18 @@ def _node(node, out, chain, depth):
         if kind == 'uv':
             chain.needs.add(TEXCOORD_UV)
         return (lambda c: c[kind]), True
+    if t == 'UVMAP':
+        # Cycles' UVMapNode: the active render map where it names none (as Texture Coordinate
+        # UV), else the map by name, as an Attribute node's Vector reads it (it had been given
+        # up, the texture standing at its input's own value: a Checker 1.19x Cycles)
+        if node.from_instancer:
+            raise nodeeval.NotCompiled("UV Map from the instancer")
+        if not node.uv_map:
+            chain.needs.update(('uv', TEXCOORD_UV))
+            return (lambda c: c['uv']), True
+        need = pr.ATTRIBUTE_NEED + attribute_key(node.uv_map)
+        chain.needs.add(need)
+        return (lambda c: _rgba(c[need])[:, :3]), True
     if t == 'NEW_GEOMETRY' and out.name in ('Random Per Island', 'Pointiness'):
         # Cycles' standard attributes of the mesh (a face one: a number per triangle; a point one)
         need = pr.ATTRIBUTE_NEED + attribute_key(out.name.lower().replace(' ', '_'))
