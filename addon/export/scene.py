@@ -35,7 +35,7 @@ from .strands import (StrandSource, hair_arrays, hair_systems, read_strands, str
                       triangle_count)
 from .usedindices import used_indices
 from .world import (BOUNCE_RAYS, CAMERA_RAYS, effective_world, export_world, max_bounces_said, ray_kinds_said,
-                    sampled_as_one, world_visibility)
+                    sampled_as_one, sampling_said, world_visibility)
 
 # object types that render as geometry (curves, surfaces, text, metaballs through their mesh)
 GEOMETRY_TYPES = {'MESH', 'CURVE', 'SURFACE', 'FONT', 'META', 'POINTCLOUD', 'CURVES'}
@@ -351,6 +351,9 @@ class Exporter:
         if said:
             self.messages.append(('WARNING', said))
         said = None if self.world is None else max_bounces_said(self.world, environment, settings.max_bounces)
+        if said:
+            self.messages.append(('WARNING', said))
+        said = None if self.world is None else sampling_said(self.world, environment)
         if said:
             self.messages.append(('WARNING', said))
         # (only where the tree has lamps or emitters to leave out: the world is not culled so)
