@@ -77,13 +77,15 @@ class Bounds:
     """What the light tree (tree.py) knows of a light with a position: its box, the cone of
     directions it emits in (unit axis, cos of the spread cos_o: -1 for every direction, cos of
     the falloff beyond it cos_e) and its energy (on-axis intensity: it gives an irradiance of
-    about energy / d^2 at distance d)."""
+    about energy / d^2 at distance d); radius: a sphere about the box's centre holding the
+    light, where it is tighter than the box's (None: the box's)."""
     lo: np.ndarray
     hi: np.ndarray
     axis: np.ndarray
     cos_o: float
     cos_e: float
     energy: float
+    radius: float | None = None
 
 
 @dataclass
@@ -94,6 +96,14 @@ class LightSample:
     pdf: np.ndarray      # (n,) solid-angle pdf (inf: delta light)
     target: np.ndarray | None = None   # (3,n) point the shadow ray must end at (lights that are
                                        # geometry); None: the ray runs dist along wi
+
+
+def own_sphere(center, reach: float) -> float:
+    """The radius of a sphere about the centre of the float32 box center +- half that holds every
+    point within reach of center: reach, grown by the box's own rounding (its centre is off
+    center by up to an ULP of its coordinates)."""
+    size = float(np.max(np.abs(np.asarray(center, np.float64)))) + float(reach)
+    return float(reach) * (1.0 + 1e-5) + 8.0 * float(np.finfo(np.float32).eps) * size
 
 
 def luminance(rgb) -> float:

@@ -25,7 +25,7 @@ import numpy as np
 from ..sampling import (concentric_disk, dot, normalize, one_minus_cos_from_sin2, orthonormal_basis,
                         to_world, uniform_cone)
 from .base import (F32, KIND_POINT, KIND_SPOT, POINT_DELTA, POINT_DISK, POINT_SPHERE, Bounds, Lamp, LightSample,
-                   col, luminance, make_record, matvec, outer)
+                   col, luminance, make_record, matvec, outer, own_sphere)
 from .ies import ies_direction, ies_mean
 
 
@@ -58,7 +58,8 @@ class PointLight(Lamp):
         energy = luminance(self.emit) * (1.0 if self.delta else np.pi * self.radius ** 2)
         if self.ies is not None:        # the profile's mean over the sphere (the pick stays unbiased)
             energy *= ies_mean(self.ies)
-        return Bounds(self.center - r, self.center + r, np.array([0.0, 0.0, 1.0], F32), -1.0, 0.0, energy)
+        return Bounds(self.center - r, self.center + r, np.array([0.0, 0.0, 1.0], F32), -1.0, 0.0, energy,
+                      own_sphere(self.center, r))
 
     def record(self):
         shape = POINT_DELTA if self.delta else POINT_SPHERE if self.sphere else POINT_DISK
@@ -207,7 +208,7 @@ class SpotLight(PointLight):
         widest = float(np.arccos(np.clip(axis @ edge, -1.0, 1.0)).max()) + 1e-3
         if widest >= np.pi / 2:
             return b
-        return Bounds(b.lo, b.hi, axis.astype(F32), float(np.cos(widest)), 1.0, b.energy)
+        return Bounds(b.lo, b.hi, axis.astype(F32), float(np.cos(widest)), 1.0, b.energy, b.radius)
 
     def _cone_fields(self) -> dict:
         # inv_smooth 0 marks the hard edge (blend 0)

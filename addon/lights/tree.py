@@ -36,6 +36,8 @@ def build_tree(lamps, triangles, num_lamps: int, enabled: bool = True, tri_objec
     cos_o = [np.asarray([b.cos_o for _, b in rows], F32)]
     cos_e = [np.asarray([b.cos_e for _, b in rows], F32)]
     energy = [np.asarray([b.energy for _, b in rows], np.float64)]
+    # each lamp's own sphere where it has one (a tilted area light's box holds a far wider one)
+    radius = [np.asarray([np.inf if b.radius is None else b.radius for _, b in rows], F32)]
     keys = [np.asarray([i for i, _ in rows], np.int64)]
     groups = [np.arange(len(rows), dtype=np.int64)]
     light_set = None if sets is None else [np.asarray([sets[0][i] for i, _ in rows], np.uint8)]
@@ -49,6 +51,7 @@ def build_tree(lamps, triangles, num_lamps: int, enabled: bool = True, tri_objec
         cos_e.append(np.zeros(ntri, F32))
         # power = area x radiance x 2 pi (both sides): on-axis intensity radiance x area
         energy.append(np.asarray(triangles.power, np.float64) / (2.0 * np.pi))
+        radius.append(np.full(ntri, np.inf, F32))        # (a triangle: its box's)
         keys.append(num_lamps + np.arange(ntri, dtype=np.int64))
         groups.append(len(rows) + np.unique(objects, return_inverse=True)[1])
         if light_set is not None:
@@ -61,5 +64,7 @@ def build_tree(lamps, triangles, num_lamps: int, enabled: bool = True, tri_objec
     tree = dacrt.lamps.light_tree(np.concatenate(lo, axis=1), np.concatenate(hi, axis=1),
                                   np.concatenate(axis, axis=1), np.concatenate(cos_o), np.concatenate(cos_e),
                                   energy, keys.astype(np.int32), np.concatenate(groups).astype(np.int32),
-                                  None if light_set is None else np.concatenate(light_set))
+                                  None if light_set is None else np.concatenate(light_set),
+                                  np.concatenate(radius))
     return tree, np.sort(keys)
+

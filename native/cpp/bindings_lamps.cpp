@@ -202,7 +202,7 @@ py::tuple tree_stop_weighs_py(const LightTree& t, F32Array P, py::object N) {
 
 std::shared_ptr<LightTree> make_tree(F32Array lo, F32Array hi, F32Array axis, F32Array cos_o, F32Array cos_e,
                                      py::array_t<double, py::array::c_style> energy, I32Array key, py::object group,
-                                     py::object set) {
+                                     py::object set, py::object radius) {
     if (lo.ndim() != 2 || lo.shape(0) != 3) throw py::value_error("lo must have shape (3, m), got " + shape_str(lo));
     const size_t m = size_t(lo.shape(1));
     need_shape(hi, 3, m, "hi");
@@ -223,6 +223,12 @@ std::shared_ptr<LightTree> make_tree(F32Array lo, F32Array hi, F32Array axis, F3
         set_keep = set.cast<py::array_t<uint8_t, py::array::c_style>>();
         need_shape(set_keep, 0, m, "set");
         in.set = set_keep.data();
+    }
+    F32Array radius_keep;
+    if (!radius.is_none()) {
+        radius_keep = radius.cast<F32Array>();
+        need_shape(radius_keep, 0, m, "radius");
+        in.radius = radius_keep.data();
     }
     py::gil_scoped_release nogil;
     return std::make_shared<LightTree>(in);  // it validates: std::invalid_argument is ValueError
@@ -931,7 +937,8 @@ void register_lamps(py::module_& m) {
         m, "LightTree", "Many-light sampling: a light per point by its estimated contribution (lighttree.h)",
         py::module_local())
         .def(py::init(&make_tree), py::arg("lo"), py::arg("hi"), py::arg("axis"), py::arg("cos_o"), py::arg("cos_e"),
-             py::arg("energy"), py::arg("key"), py::arg("group") = py::none(), py::arg("set") = py::none())
+             py::arg("energy"), py::arg("key"), py::arg("group") = py::none(), py::arg("set") = py::none(),
+             py::arg("radius") = py::none())
         .def_property_readonly("members", &LightTree::members)
         .def_property_readonly("nodes", &LightTree::nodes)
         .def("sample", &tree_sample_py, py::arg("P"), py::arg("u"), py::arg("N") = py::none(),

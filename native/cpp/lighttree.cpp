@@ -195,6 +195,8 @@ struct Item {
     Cone cone;
     double energy;
     uint64_t sets;  // light linking: its members' light sets (bit s)
+    double radius;  // one member's own bounding sphere about the box centre (LightTreeInput::radius;
+                    // infinite: the box's)
 };
 
 Cone member_cone(const LightTreeInput& in, size_t i) {
@@ -289,11 +291,13 @@ struct Builder {
 
     // Fills node `at` over items order[b, e); returns its box (lo, hi) and cone.
     void build(size_t at, size_t b, size_t e, double lo[3], double hi[3], Cone& cone) {
+        double own_radius = INFINITY;
         if (e - b == 1) {
             const int32_t i = order[b];
             const Item& it = items[size_t(i)];
             for (int k = 0; k < 3; ++k) lo[k] = it.lo[k], hi[k] = it.hi[k];
             cone = it.cone;
+            own_radius = it.radius;
             nodes[at].energy = it.energy;
             nodes[at].child = -1 - i;
             leaf_of_item[size_t(i)] = int32_t(at);
@@ -331,16 +335,19 @@ struct Builder {
             nodes[at].child = int32_t(child);
         }
         LightTreeNode& nd = nodes[at];
-        double r2 = 0.0;
+        double r2 = 0.0, off2 = 0.0;
         for (int k = 0; k < 3; ++k) {
             const double c = 0.5 * (lo[k] + hi[k]), h = 0.5 * (hi[k] - lo[k]);
             nd.center[k] = float(c);
             // the float centre is off the box's by up to half an ULP: the radius covers that
             const double off = std::fabs(double(nd.center[k]) - c);
             r2 += (h + off) * (h + off);
+            off2 += off * off;
             nd.half[k] = float((h + off) * (1.0 + 1e-6));
         }
-        nd.radius = float(std::sqrt(r2) * (1.0 + 1e-6));
+        // a lone light's own sphere where it is the tighter (moved by the centre's rounding)
+        const double own = own_radius + std::sqrt(off2);
+        nd.radius = float(std::min(std::sqrt(r2), own) * (1.0 + 1e-6));
         const bool all = cone.theta_o >= kPi;
         for (int k = 0; k < 3; ++k) nd.axis[k] = float(cone.axis[k]);
         nd.cos_o = all ? -1.0f : float(std::cos(cone.theta_o));
@@ -375,6 +382,7 @@ std::string light_tree_error(const LightTreeInput& in) {
         if (!(in.energy[i] > 0.0 && in.energy[i] <= 1e200)) return at() + "energy must be > 0 and at most 1e200";
         if (in.group && in.group[i] < 0) return at() + "group must be >= 0";
         if (in.set && in.set[i] > 63) return at() + "set must lie in 0..63";
+        if (in.radius && !(in.radius[i] >= 0.0f)) return at() + "radius must be >= 0 (inf: the box's)";
         const int32_t key = in.key[i];
         if (key < 0 || key >= (int32_t(1) << 30)) return at() + "key must lie in 0..2^30-1";
         if (size_t(key) >= seen.size()) seen.resize(size_t(key) + 1, 0);
@@ -402,9 +410,11 @@ LightTree::LightTree(const LightTreeInput& in) {
             Item it{};
             for (int k = 0; k < 3; ++k) it.lo[k] = INFINITY, it.hi[k] = -INFINITY;
             it.cone = member_cone(in, i);
+            it.radius = in.radius ? double(in.radius[i]) : INFINITY;
             items.push_back(it);
         } else {
             items.back().cone = merge(items.back().cone, member_cone(in, i));
+            items.back().radius = INFINITY;     // a group: its box's sphere
         }
         Item& it = items.back();
         it.sets |= uint64_t(1) << (in.set ? in.set[i] : 0);

@@ -75,6 +75,11 @@ struct LightTreeInput {
     // share theirs). A point whose receiver mask (bit s: it is lit by set s) holds none of a
     // node's sets never goes there, so light samples are not spent on lights it is not lit by.
     const uint8_t* set = nullptr;
+    // (null: the box's) each member's own bounding sphere about its box's centre, radius (m,
+    // >= 0; inf: the box's): a leaf of one member takes it where it is tighter than the box's (a tilted
+    // area light's box holds a sphere up to sqrt(3)x its own, which had kept it from being
+    // culled where it cannot reach; a member of a group keeps the box's)
+    const float* radius = nullptr;
 };
 
 class LightTree {

@@ -164,6 +164,8 @@ def test_one_light_and_coincident_lights():
     (dict(keys=[0, -2]), 'light 1: key must lie in'),
     (dict(cos_o=[1.0, 2.0]), 'light 1: cos_o and cos_e must lie in'),
     (dict(m=0), 'at least one light'),
+    (dict(radius=[1.0, -0.5]), 'light 1: radius must be >= 0'),
+    (dict(radius=[np.nan, 1.0]), 'light 0: radius must be >= 0'),
 ])
 def test_bad_input_is_refused_naming_the_light(bad, message):
     m = bad.get('m', 2)
@@ -173,7 +175,27 @@ def test_bad_input_is_refused_naming_the_light(bad, message):
     with pytest.raises(ValueError, match=message):
         lamps.light_tree(lo, np.ones((3, m), F32), np.tile([[0.0], [0.0], [1.0]], (1, m)),
                          bad.get('cos_o', np.full(m, EVERY)), np.zeros(m), bad.get('energy', np.ones(m)),
-                         bad.get('keys', np.arange(m)))
+                         bad.get('keys', np.arange(m)), radius=bad.get('radius'))
+
+
+def test_a_lone_lights_own_sphere_narrows_its_cone_test():
+    """A flat light 1 m wide, tilted in its box (half extents 0.5 each way: a box sphere of
+    0.87 m) emitting within 48 degrees of +z, and a far point light: at a point seen 62 degrees
+    off the axis from 3 m, its box's sphere (17 degrees) keeps it, its own of 0.5 m (10 degrees)
+    culls it. A radius of inf is the box's, as none."""
+    c = np.array([[0.0, 20.0], [0.0, 20.0], [0.0, 20.0]], F32)
+    h = np.array([[0.5, 0.0], [0.5, 0.0], [0.5, 0.0]], F32)
+    axis = np.array([[0.0, 0.0], [0.0, 0.0], [1.0, 1.0]])
+    args = (c - h, c + h, axis, np.array([1.0, EVERY]), np.array([np.cos(np.radians(48.0)), 0.0]),
+            np.array([1.0, 1e-3]), np.arange(2))
+    a = np.radians(62.0)
+    P = np.array([[3.0 * np.sin(a)], [0.0], [3.0 * np.cos(a)]], F32)
+    box, none = lamps.light_tree(*args, radius=[np.inf, np.inf]), lamps.light_tree(*args)
+    own = lamps.light_tree(*args, radius=[0.5, 0.0])
+    assert box.pdf(P, np.array([0]))[0] > 0.5
+    assert box.pdf(P, np.array([0]))[0] == none.pdf(P, np.array([0]))[0]
+    assert own.pdf(P, np.array([0]))[0] == 0.0
+    np.testing.assert_allclose(own.pdf(P, np.array([1]))[0], 1.0)
 
 
 def test_groups_are_leaves_split_by_energy():

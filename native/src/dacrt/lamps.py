@@ -131,7 +131,7 @@ EnvironmentMap = _core.EnvironmentMap
 LightTree = _core.LightTree
 
 
-def light_tree(lo, hi, axis, cos_o, cos_e, energy, key, group=None, set=None) -> LightTree:
+def light_tree(lo, hi, axis, cos_o, cos_e, energy, key, group=None, set=None, radius=None) -> LightTree:
     """A light tree (many-light sampling, native/cpp/lighttree.h) over m lights: boxes lo, hi
     (3, m), emission cones (unit axis (3, m), cos of the spread cos_o (m,), -1 for every
     direction, and of the falloff beyond it cos_e (m,)), energy (m,) > 0 (on-axis intensity:
@@ -142,11 +142,15 @@ def light_tree(lo, hi, axis, cos_o, cos_e, energy, key, group=None, set=None) ->
     lights with the same group form one leaf, within which a point picks by energy alone (e.g.
     the triangles of one emissive object). set (m,) uint8 0..63 or None: light linking's light
     set of each light; sample and pdf then take receivers (n,) uint64, each point's receiver
-    mask (bit s: lit by set s), and never pick a light of a set the point is not lit by."""
+    mask (bit s: lit by set s), and never pick a light of a set the point is not lit by.
+    radius (m,) >= 0 (inf: none) or None: each light's own bounding sphere about its box's centre,
+    which a leaf of that light alone takes where it is tighter than the box's (a tilted area
+    light's box holds a sphere up to sqrt(3)x its own)."""
     f32 = lambda a: np.ascontiguousarray(a, np.float32)
     return LightTree(f32(lo), f32(hi), f32(axis), f32(cos_o), f32(cos_e), np.ascontiguousarray(energy, np.float64),
                      np.ascontiguousarray(key, np.int32), None if group is None else np.ascontiguousarray(group, np.int32),
-                     None if set is None else np.ascontiguousarray(set, np.uint8))
+                     None if set is None else np.ascontiguousarray(set, np.uint8),
+                     None if radius is None else f32(radius))
 
 
 def environment_map(rgb, to_map=None, interpolation: str = "Linear", srgb: bool = False, scale=None) -> EnvironmentMap:
