@@ -363,6 +363,22 @@ def world_tree(scene=None):
     return w, nt, nt.nodes.new('ShaderNodeOutputWorld')
 
 
+def sky_over_floor(sky_type=None):
+    """A camera looking down at a white 20 m floor under a new world: a Background of a Sky
+    Texture of sky_type (None: the Background's uniform colour). Returns the world; the caller
+    sets its settings and renders."""
+    camera(location=(0, -6, 3), rotation=(math.radians(65), 0, 0))
+    plane("Floor", size=20, materials=(diffuse("White", (0.8, 0.8, 0.8)),))
+    w, nt, out = world_tree()
+    bg = nt.nodes.new('ShaderNodeBackground')
+    nt.links.new(bg.outputs[0], out.inputs['Surface'])
+    if sky_type:
+        tex = nt.nodes.new('ShaderNodeTexSky')
+        tex.sky_type = sky_type
+        nt.links.new(tex.outputs[0], bg.inputs['Color'])
+    return w
+
+
 def panorama_world(name, samples=16):
     """A fresh factory scene seen by a 64x32 equirectangular camera at the origin, its new world
     `name` (returned, with its node tree's default Background) and a grey diffuse ball 3 units

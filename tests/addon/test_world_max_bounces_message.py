@@ -3,7 +3,6 @@ varies: past that depth Cycles weighs the world's light found by BSDF rays with 
 map's MIS weight, which DACRT's map only approximates. Fuzz 1365 (a Hosek-Wilkie sky at Max
 Bounces 0 under 2 bounces) rendered blocks 0.93x Cycles without a word; the same scene with a
 uniform world (no map) agrees, and so does the sky at the default Max Bounces."""
-import math
 
 import pytest
 
@@ -12,15 +11,7 @@ from . import scenes
 
 def _sky_over_floor(world_max_bounces, sky=True):
     import bpy
-    scenes.camera(location=(0, -6, 3), rotation=(math.radians(65), 0, 0))
-    scenes.plane("Floor", size=20, materials=(scenes.diffuse("White", (0.8, 0.8, 0.8)),))
-    w, nt, out = scenes.world_tree()
-    bg = nt.nodes.new('ShaderNodeBackground')
-    nt.links.new(bg.outputs[0], out.inputs['Surface'])
-    if sky:
-        tex = nt.nodes.new('ShaderNodeTexSky')
-        tex.sky_type = 'HOSEK_WILKIE'
-        nt.links.new(tex.outputs[0], bg.inputs['Color'])
+    w = scenes.sky_over_floor('HOSEK_WILKIE' if sky else None)
     w.cycles.max_bounces = world_max_bounces
     sc = bpy.context.scene
     sc.render.resolution_x, sc.render.resolution_y = 8, 6

@@ -4,7 +4,6 @@ sample counts and Cycles' render is darker; DACRT samples the world as a light w
 setting (the image Cycles converges to). Fuzz seed 207 (a Multiple Scattering sky, sun disc at
 3.6 degrees, Sampling Method None) rendered DACRT's red 1.64x Cycles' without a word; with
 Sampling Method Automatic, or the sun disc off, the two agree within 0.3%."""
-import math
 
 import pytest
 
@@ -13,15 +12,7 @@ from . import scenes
 
 def _sky_over_floor(method, sky=True):
     import bpy
-    scenes.camera(location=(0, -6, 3), rotation=(math.radians(65), 0, 0))
-    scenes.plane("Floor", size=20, materials=(scenes.diffuse("White", (0.8, 0.8, 0.8)),))
-    w, nt, out = scenes.world_tree()
-    bg = nt.nodes.new('ShaderNodeBackground')
-    nt.links.new(bg.outputs[0], out.inputs['Surface'])
-    if sky:
-        tex = nt.nodes.new('ShaderNodeTexSky')
-        tex.sky_type = 'MULTIPLE_SCATTERING'
-        nt.links.new(tex.outputs[0], bg.inputs['Color'])
+    w = scenes.sky_over_floor('MULTIPLE_SCATTERING' if sky else None)
     w.cycles.sampling_method = method
     sc = bpy.context.scene
     sc.render.resolution_x, sc.render.resolution_y = 8, 6
