@@ -363,10 +363,11 @@ def world_tree(scene=None):
     return w, nt, nt.nodes.new('ShaderNodeOutputWorld')
 
 
-def sky_over_floor(sky_type=None):
-    """A camera looking down at a white 20 m floor under a new world: a Background of a Sky
-    Texture of sky_type (None: the Background's uniform colour). Returns the world; the caller
-    sets its settings and renders."""
+def sky_over_floor(sky_type=None, world_cycles=(), **dacrt):
+    """Render (8 x 6, 1 sample) a camera looking down at a white 20 m floor under a new world: a
+    Background of a Sky Texture of sky_type (None: the Background's uniform colour), the
+    world's Cycles settings from world_cycles ((name, value) pairs) and the scene's DACRT ones
+    from dacrt."""
     camera(location=(0, -6, 3), rotation=(math.radians(65), 0, 0))
     plane("Floor", size=20, materials=(diffuse("White", (0.8, 0.8, 0.8)),))
     w, nt, out = world_tree()
@@ -376,7 +377,14 @@ def sky_over_floor(sky_type=None):
         tex = nt.nodes.new('ShaderNodeTexSky')
         tex.sky_type = sky_type
         nt.links.new(tex.outputs[0], bg.inputs['Color'])
-    return w
+    for name, value in world_cycles:
+        setattr(w.cycles, name, value)
+    sc = bpy.context.scene
+    sc.render.resolution_x, sc.render.resolution_y = 8, 6
+    sc.dacrt.samples = 1
+    for name, value in dacrt.items():
+        setattr(sc.dacrt, name, value)
+    render_rgba(sc)
 
 
 def panorama_world(name, samples=16):

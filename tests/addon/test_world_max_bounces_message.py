@@ -10,14 +10,7 @@ from . import scenes
 
 
 def _sky_over_floor(world_max_bounces, sky=True):
-    import bpy
-    w = scenes.sky_over_floor('HOSEK_WILKIE' if sky else None)
-    w.cycles.max_bounces = world_max_bounces
-    sc = bpy.context.scene
-    sc.render.resolution_x, sc.render.resolution_y = 8, 6
-    sc.dacrt.samples = 1
-    sc.dacrt.max_bounces = 2
-    scenes.render_rgba(sc)
+    scenes.sky_over_floor('HOSEK_WILKIE' if sky else None, [('max_bounces', world_max_bounces)], max_bounces=2)
 
 
 def _warned(said):

@@ -11,13 +11,7 @@ from . import scenes
 
 
 def _sky_over_floor(method, sky=True):
-    import bpy
-    w = scenes.sky_over_floor('MULTIPLE_SCATTERING' if sky else None)
-    w.cycles.sampling_method = method
-    sc = bpy.context.scene
-    sc.render.resolution_x, sc.render.resolution_y = 8, 6
-    sc.dacrt.samples = 1
-    scenes.render_rgba(sc)
+    scenes.sky_over_floor('MULTIPLE_SCATTERING' if sky else None, [('sampling_method', method)])
 
 
 def _warned(said):
