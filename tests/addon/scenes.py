@@ -392,7 +392,7 @@ def panorama_world(name, samples=16):
     `name` (returned, with its node tree's default Background) and a grey diffuse ball 3 units
     along +Y that the world lights, both engines at `samples` spp and 1 bounce, Cycles without
     denoising: the procedural-world parity tests' common set-up. Returns (scene, world)."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x, sc.render.resolution_y = 64, 32
     cam = camera(location=(0, 0, 0), rotation=(math.pi / 2, 0, 0))

@@ -83,7 +83,7 @@ def test_aov_named_like_another_pass(scene, tmp_path, said, name, kind, channels
     assert any(f"{winner} and {loser} have one name" in t and f"those of {loser} are dropped" in t
                for t in said), said
     # the values of that one alone, in the pass's channels (the first ones, as Cycles writes them)
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.engine = 'DACRT'
     sc.render.resolution_x, sc.render.resolution_y = 32, 24

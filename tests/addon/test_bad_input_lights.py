@@ -15,7 +15,7 @@ NAN = float('nan')
 def _render(kind, tmp_path, **props):
     """A grey floor under a dim world, lit by one light of kind with props ('location' is the
     object's), rendered at 8x6."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     scene = bpy.context.scene
     scene.render.engine = 'DACRT'
     scene.render.resolution_x, scene.render.resolution_y = 8, 6

@@ -48,7 +48,7 @@ def test_nan_mapping_before_an_image_reads_it_black(scene, said, into, which, va
     """(Blender stores an infinite input as the largest float: no infinity reaches the export.)"""
     img = _scene(scene, into, which, value)   # had failed: "texture_transform must be (2, 3) finite"
     assert any(f"Mapping node 'Mapping' {named}" in t and "image 'chk' reads black" in t for t in said), said
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     scene = bpy.context.scene
     scene.render.engine = 'DACRT'
     black = np.zeros((8, 8, 4), np.float32)

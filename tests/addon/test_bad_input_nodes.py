@@ -74,7 +74,7 @@ def _zero_and_nan(scene, node_type, socket, **settings):
     import bpy
     out = []
     for value in (0.0, NAN):
-        bpy.ops.wm.read_factory_settings(use_empty=True)
+        bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
         scene = bpy.context.scene
         scene.render.engine = 'DACRT'
         node, _ = _plane_fed_by(scene, node_type, socket, value)

@@ -12,7 +12,7 @@ from . import scenes
 def _render(scene, value, tmp_path, channels=slice(0, 3)):
     """A UV-mapped plane filling an orthographic view, its Diffuse colour a 4x4 float image of
     0.5 with texel 5's channels (R, G, B by default) set to value, sunlit under a grey world."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     scene = bpy.context.scene
     scene.render.engine = 'DACRT'
     scene.render.resolution_x, scene.render.resolution_y = 16, 16

@@ -269,7 +269,7 @@ def test_filter_glossy_from_value_roughness_against_cycles(scene, said, tmp_path
     """Roughness from a Value of 0.95: Cycles' image is the same at Filter Glossy 1 and 0 (its
     bsdf_blur acts below 0.71), and nothing is said; from 0.3 it changes, and the INFO is said."""
     for rough, blurred in ((0.95, False), (0.3, True)):
-        bpy.ops.wm.read_factory_settings(use_empty=True)
+        bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
         sc = bpy.context.scene
         sc.render.resolution_x, sc.render.resolution_y = 32, 24
         _principled(sc, Roughness=rough)

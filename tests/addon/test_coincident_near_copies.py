@@ -79,7 +79,7 @@ def test_a_twin_just_below_the_lamp_is_said(scene, said):
 
 def test_the_lamp_alone_an_exact_twin_and_one_moved_apart_are_not(scene, said):
     for dz in (None, 0.0, 1e-3):
-        bpy.ops.wm.read_factory_settings(use_empty=True)
+        bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
         bpy.context.scene.render.engine = 'DACRT'
         _scene(bpy.context.scene, dz)
         assert _said(said) == [], dz

@@ -82,7 +82,7 @@ def test_a_twin_turned_90_degrees_is_said(scene, said):
 
 def test_lamps_apart_alone_or_near_copies_are_not_said_as_overlapping(scene, said):
     for placed in (None, ((1.0, 0.0), 0.0), ((0.0, 1e-3), math.pi / 2), ((0.0, -1e-6), 0.0)):
-        bpy.ops.wm.read_factory_settings(use_empty=True)
+        bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
         bpy.context.scene.render.engine = 'DACRT'
         _scene(bpy.context.scene, placed)
         assert _said(said) == [], (placed, said)

@@ -177,7 +177,7 @@ def test_constant_inputs_evaluate_chains_of_constant_nodes(dacrt_addon):
     """nodeeval.constant: what a Value/RGB -> Math / Mix chain computes for an input, with
     Cycles' conversions (float -> (v, v, v), colour -> luminance); an image or an unsupported
     node anywhere in the chain gives the socket's own value and exact False."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     nt = bpy.data.node_groups.new("Consts", 'ShaderNodeTree')
     e = nt.nodes.new('ShaderNodeEmission')
     e.inputs['Strength'].default_value = 9.0
@@ -220,7 +220,7 @@ def test_combine_and_separate_xyz_with_cycles_vector_conversions(dacrt_addon):
     """Combine XYZ makes a vector, Separate XYZ takes one apart; a vector into a float input is
     its average (Cycles' svm_node_convert, NODE_CONVERT_VF), a colour its luminance, a float
     into a vector input (v, v, v)."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     nt = bpy.data.node_groups.new("Vectors", 'ShaderNodeTree')
     e = nt.nodes.new('ShaderNodeEmission')
     comb = nt.nodes.new('ShaderNodeCombineXYZ')

@@ -200,7 +200,7 @@ def test_environment_keeps_an_8bit_map_encoded(tmp_path, exported):
     reads the decoded pixels alone."""
     path = _write(tmp_path / "env.png", np.repeat(BYTES[..., :3], 2, axis=0), 'uint8')
     for interpolation, kept in (('Linear', True), ('Closest', False)):
-        bpy.ops.wm.read_factory_settings(use_empty=True)
+        bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
         bpy.context.scene.render.engine = 'DACRT'
         scenes.camera((0, 0, 5), (0, 0, 0))
         scenes.environment_world(bpy.data.images.load(path), interpolation=interpolation)
@@ -219,7 +219,7 @@ def test_an_8bit_environment_map_is_built_from_its_bytes_alone(tmp_path, exporte
     from addon.lights.environment import EnvironmentLight
     from addon.texture import ByteTexels
     path = _write(tmp_path / "env.png", np.repeat(BYTES[..., :3], 2, axis=0), 'uint8')
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     bpy.context.scene.render.engine = 'DACRT'
     scenes.camera((0, 0, 5), (0, 0, 0))
     scenes.environment_world(bpy.data.images.load(path), 2.0)
@@ -232,7 +232,7 @@ def test_an_8bit_environment_map_is_built_from_its_bytes_alone(tmp_path, exporte
 
 def test_an_environment_images_alpha_does_not_light_the_world(exported):
     """The map holds the image's RGBA as read: a black image of alpha 1 is a black world."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     bpy.context.scene.render.engine = 'DACRT'
     scenes.camera((0, 0, 5), (0, 0, 0))
     px = np.zeros((4, 8, 4), np.float32)

@@ -54,7 +54,7 @@ def test_rotation_is_blenders_euler_xyz():
 
 
 def test_point_mapping_worked_by_hand(dacrt_addon):
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     mat, nt, tex, uv = _textured("Point")
     m = _mapping(nt, 'POINT', loc=(0.25, 0.5, 7.0), rot=(0, 0, math.pi / 2), scale=(2, 3, 1))
     nt.links.new(uv, m.inputs['Vector'])
@@ -69,7 +69,7 @@ def test_point_mapping_worked_by_hand(dacrt_addon):
 def test_texture_mapping_undoes_point_mapping(dacrt_addon):
     """Texture is Point's inverse (same inputs); a chain of the two maps the UV map to itself.
     A zero scale component maps that axis to 0 (Cycles' safe_divide)."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     mat, nt, tex, uv = _textured("Inverse", source='UVMAP')
     args = dict(loc=(0.3, -0.2, 0.1), rot=(0.4, -0.3, 1.1), scale=(1.5, 0.5, 2.0))
     p, t = _mapping(nt, 'POINT', **args), _mapping(nt, 'TEXTURE', **args)
@@ -90,7 +90,7 @@ def test_texture_mapping_undoes_point_mapping(dacrt_addon):
 
 
 def test_vector_type_ignores_location_and_unlinked_vector_is_a_point(dacrt_addon):
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     mat, nt, tex, uv = _textured("Vector")
     m = _mapping(nt, 'VECTOR', rot=(0, 0, math.pi), scale=(2, 2, 2))
     nt.links.new(uv, m.inputs['Vector'])
@@ -105,7 +105,7 @@ def test_vector_type_ignores_location_and_unlinked_vector_is_a_point(dacrt_addon
 
 
 def test_mapping_inside_a_group_and_unsupported_sources(dacrt_addon):
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     mat, nt, tex, uv = _textured("Grouped")
     g, gi, go = _group("Tile", inputs=(('UV', 'NodeSocketVector'),), outputs=(('Vector', 'NodeSocketVector'),))
     m = g.nodes.new('ShaderNodeMapping')
@@ -151,7 +151,7 @@ def test_mapping_inputs_driven_by_constant_nodes(dacrt_addon):
     """A Value node on Scale (one number tiling both ways), an RGB node on Location and a Math
     node on Rotation are constants Cycles computes: read exactly, as (v, v, v) for the Value. A
     Noise Texture on Scale is not: reported, and the socket's own value used."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     mat, nt, tex, uv = _textured("Driven")
     m = _mapping(nt, 'POINT', loc=(9, 9, 9), rot=(1, 1, 1), scale=(7, 7, 7))
     nt.links.new(uv, m.inputs['Vector'])
@@ -186,7 +186,7 @@ def test_an_unlinked_group_input_is_a_constant_point(dacrt_addon):
     """An Image Texture inside a group whose Vector comes from the Group Input, the Group node's
     Vector left at its value: Cycles reads that one point (one texel everywhere), not the UV
     map an unlinked Vector means (read as the UV map: 0.40/2.43/0.77x Cycles' mean)."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     g, gi, go = _group("Lookup", inputs=(('Vector', 'NodeSocketVector'),), outputs=(('Color', 'NodeSocketColor'),))
     inner = g.nodes.new('ShaderNodeTexImage')
     g.links.new(gi.outputs['Vector'], inner.inputs['Vector'])
@@ -220,7 +220,7 @@ def test_a_texture_nodes_own_mapping_is_applied_first(dacrt_addon, kind):
     their Vector chain (Cycles 5.0, an image and a checker scaled (2.5, 1.5), moved (0.3, 0.2),
     turned 0.4 and X/Y swapped: within 0.004 per 8x8 block; ignored before, up to 0.52 off)."""
     from mathutils import Matrix
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     mat, nt, out = scenes._material("Own mapping")
     tex = nt.nodes.new('ShaderNodeTexImage')
     reasons = []

@@ -77,7 +77,7 @@ def _sphere_disk(mat, tmp_path, world=1.0):
 def test_a_negative_constant_emission_is_emitted_as_cycles_does(tmp_path, said):
     """Cycles emits the negative red; it had been clamped to 0 and said. Before: DACRT
     (0, 0.5, 0.8), Cycles (-0.3, 0.5, 0.8)."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     d, c = _sphere_disk(_negative_material('emission'), tmp_path, world=0.0)
     np.testing.assert_allclose(c, [-0.3, 0.5, 0.8], atol=0.01)
     np.testing.assert_allclose(d, c, atol=0.005)
@@ -87,7 +87,7 @@ def test_a_negative_constant_emission_is_emitted_as_cycles_does(tmp_path, said):
 def test_a_negative_diffuse_in_a_mix_is_clamped_before_the_sum(tmp_path):
     """A sphere under a white world, 0 bounces, orthographic: its disk's mean is the albedo.
     Before: DACRT red 0.245 (-0.15 + 0.4), Cycles 0.393 (0 + 0.4)."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     d, c = _sphere_disk(_negative_material('mix'), tmp_path)
     disk = {'DACRT': d, 'CYCLES': c}
     np.testing.assert_allclose(disk['DACRT'], disk['CYCLES'], rtol=0.02)
@@ -187,7 +187,7 @@ def test_said_exactly_where_the_image_differs_from_cycles(lamp_under_floor, tmp_
     within 0.2%) and nothing is said; a point lamp under the floor lights the floor's top through
     the bent normals here and not in Cycles (measured +8%), and that is said."""
     from tests.parity import rendering
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     _sphere_on_floor()
     _area_above()
     if lamp_under_floor:

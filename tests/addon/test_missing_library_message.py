@@ -16,7 +16,7 @@ def _file_with_a_missing_library(tmp_path, hide_linked_cube=False):
     cube = scenes.cube("LibCube", size=1, location=(0, 0, 1), materials=[red])
     lib = tmp_path / "lib.blend"
     bpy.data.libraries.write(str(lib), {cube, red})
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     scene = bpy.context.scene
     scene.render.engine = 'DACRT'
     scene.render.resolution_x, scene.render.resolution_y = 16, 12

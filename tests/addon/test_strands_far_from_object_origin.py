@@ -39,7 +39,7 @@ def test_a_thin_tube_far_from_its_origin_keeps_its_radius(scene, exported):
 def test_hair_far_from_its_origin_renders_as_at_the_origin(scene):
     means = []
     for offset in (0.0, 1000.0):
-        bpy.ops.wm.read_factory_settings(use_empty=True)
+        bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
         sc = bpy.context.scene
         sc.render.engine = 'DACRT'
         _hair((offset, 0.0, 0.0), n=1500)

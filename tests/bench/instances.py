@@ -38,7 +38,7 @@ def build(grid=40):
 
     from tests.addon import scenes
     from tests.parity.test_instancer_attributes import instancer
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.engine = 'DACRT'
     sc.render.resolution_x, sc.render.resolution_y = 96, 96

@@ -30,7 +30,7 @@ def main(argv=None):
     from addon.export.world import export_world
     from addon.lights.environment import EnvironmentLight
     addon.register()
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     scene = bpy.context.scene
     scene.world = bpy.data.worlds.new("World")
     nt = scene.world.node_tree

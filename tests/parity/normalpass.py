@@ -10,7 +10,7 @@ from tests.addon import scenes
 
 def normal_pass_scene():
     """An empty 32x24 scene and a camera looking at a body at (0, 0, 1) from the side."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x, sc.render.resolution_y = 32, 24
     scenes.camera(location=(0, -6, 1), rotation=(1.4, 0, 0))

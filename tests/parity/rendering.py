@@ -18,7 +18,7 @@ from mathutils import Vector
 
 def build(spec):
     """Reset to a factory-empty scene, build spec's scene and apply the shared settings."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     scene = bpy.context.scene
     r = scene.render
     r.resolution_x, r.resolution_y = spec.resolution
@@ -66,7 +66,7 @@ def matched(scene, samples, bounces=0, box=True):
 def room_file():
     """A fresh file for an interior test: 64 x 48 at 100%, the Standard view transform (no look)
     and a world of its own; (scene, world)."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     s = bpy.context.scene
     s.render.resolution_x, s.render.resolution_y, s.render.resolution_percentage = 64, 48, 100
     s.view_settings.view_transform, s.view_settings.look = 'Standard', 'None'
@@ -147,7 +147,7 @@ def small_cornell(width=48, height=36):
     """A fresh file holding the parity Cornell box (scenes.build_cornell) at width x height with
     the fair settings; returns its scene."""
     from . import scenes as parity_scenes
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     parity_scenes.build_cornell()
     scene = bpy.context.scene
     scene.render.resolution_x, scene.render.resolution_y = width, height

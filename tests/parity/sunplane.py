@@ -12,7 +12,7 @@ from tests.addon import scenes
 def build(pixels, wire, resolution, samples):
     """Make the scene current. wire(tree, image node, diffuse node) links the image to the
     Diffuse BSDF's Color (through whatever nodes the test is about)."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     scenes.camera((0, 0, 5), (0, 0, 0), kind='ORTHO', ortho_scale=2.0)
     mat, nt, out = scenes._material("Textured")

@@ -143,7 +143,7 @@ def test_alpha_folded_away_as_cycles(tmp_path, said, kind, chain):
 
 
 def _tree():
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     mat, nt, out = scenes._material('F')
     em = nt.nodes.new('ShaderNodeEmission')
     tex = nt.nodes.new('ShaderNodeTexImage')

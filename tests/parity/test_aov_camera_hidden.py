@@ -25,7 +25,7 @@ def _hidden(name):
 
 
 def test_camera_hidden_material_writes_its_aov(tmp_path):
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x, sc.render.resolution_y = 48, 24
     layer = sc.view_layers[0]

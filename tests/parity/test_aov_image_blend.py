@@ -19,7 +19,7 @@ pytestmark = pytest.mark.usefixtures('parity_addon')
 def _scene(tmp_path, interpolation):
     """A cube of a Diffuse BSDF whose AOV 'a' is an 8 x 8 random 8-bit PNG (4-pixel blocks) on
     its UV map, seen at 48 x 36 with a Box filter of 1 pixel, 16 samples."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x, sc.render.resolution_y = 48, 36
     mat = scenes.diffuse('M', (0.5, 0.5, 0.5))

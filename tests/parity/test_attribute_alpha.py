@@ -73,7 +73,7 @@ def at(img, x, y):
 
 
 def test_alpha_outputs_beside_a_colour_attribute_match_cycles(tmp_path, said):
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     info = material("Info", object_info_alpha)
     # row 1.05: collection instances (the empties' colour alphas); row 0.35: plain objects

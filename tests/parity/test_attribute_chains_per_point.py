@@ -38,7 +38,7 @@ def _ramp(nt, ca):
 
 @pytest.mark.parametrize('chain', [_hsv, _gamma, _ramp])
 def test_non_affine_chain_of_a_colour_attribute_matches_cycles(tmp_path, said, chain):
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x, sc.render.resolution_y = 32, 24
     scenes.camera(location=(0, 0, 6), rotation=(0, 0, 0))

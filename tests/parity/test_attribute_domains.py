@@ -52,7 +52,7 @@ def _edge_grid(kind, x, y, rng):
 
 
 def test_edge_attributes_match_cycles(tmp_path):
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x, sc.render.resolution_y = 64, 44
     rng = np.random.default_rng(5)
@@ -115,7 +115,7 @@ def test_two_attributes_in_one_material_match_cycles(tmp_path):
     the chain learned as f(p, p) and applied to one of them, a Mix Add of A and B rendering
     B + B, silently): each face of both grids within 0.5% of Cycles (direct sun light; face
     values, so per-corner evaluation is exact)."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x, sc.render.resolution_y = 64, 32
     rng = np.random.default_rng(9)
@@ -162,7 +162,7 @@ def test_an_attribute_node_without_a_name_reads_nothing_as_cycles(tmp_path):
     attribute (orange): Cycles reads nothing (Color and Fac 0, Alpha 1); only a Color Attribute
     node's empty layer means the render colour attribute (the fourth grid). It had read the
     render colour attribute (orange where Cycles is black)."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x, sc.render.resolution_y = 64, 16
     for i, output in enumerate(('Color', 'Fac', 'Alpha', 'layer')):

@@ -106,7 +106,7 @@ def test_attribute_emission_seen_by_the_camera(tmp_path, said, case):
     point colours into a Principled's Emission Color ('principled', Strength 3). Each 6 x 6
     block within 1.5% of Cycles' brightest (measured 0.31%, 0.24%, 0.0%, 0.31%); each had been
     one flat colour, the node's own (97%, 99%, 91%, 97% off)."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
 
     def wire(nt, em):
         s = scenes.colour_attribute(nt, 'Col', by_attribute_node=case == 'face_colour')
@@ -142,7 +142,7 @@ def test_float_attribute_into_strength(tmp_path, said):
     of Cycles' brightest (measured 0.33%; the Strength's own value 1 before, 67% off). Cycles
     squares the interpolated value: per corner and interpolated it would be brighter between the
     corners."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
 
     def wire(nt, em):
         em.inputs['Color'].default_value = (1.0, 0.8, 0.6, 1)
@@ -222,7 +222,7 @@ def test_object_colour_and_object_attribute_into_emission(tmp_path, said):
     colours; an Attribute of type Object (a custom property 'tint') into the Color of two
     more, times 2. Each plane's centre within 0.5% of Cycles' (measured 0%; the node's own
     white before)."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
 
     def info_wire(nt, em):
         nt.links.new(nt.nodes.new('ShaderNodeObjectInfo').outputs['Color'], em.inputs['Color'])
@@ -261,7 +261,7 @@ def test_instances_and_a_mirrored_copy(tmp_path, said):
     blocks within 2% of Cycles' brightest (measured 1.1% at 16 samples, the quads' edges'
     noise; 0.17% at 128; 71% before)."""
     from .test_instancer_attributes import colour_of, instancer
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
 
     def wire(nt, em):
         vc = nt.nodes.new('ShaderNodeVertexColor')
@@ -294,7 +294,7 @@ def test_instances_and_a_mirrored_copy(tmp_path, said):
 def test_unsupported_attribute_is_still_reported(tmp_path, said):
     """A View Layer attribute into an Emission's Color is not read per point: the render says
     so and reads the socket's own value, as before."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
 
     def wire(nt, em):
         node = nt.nodes.new('ShaderNodeAttribute')
@@ -367,7 +367,7 @@ def test_procedural_texture_times_attribute_in_a_diffuse_colour(tmp_path, said):
     (Color Attribute ... is not read there)'), is computed per point with the colours
     interpolated there: 6 x 6 blocks within 1.5% of Cycles' brightest (measured 0.19%; 44% before)."""
     import math
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     mat, nt, out = scenes._material("CheckerTimesColour")
     d = nt.nodes.new('ShaderNodeBsdfDiffuse')
     tc = nt.nodes.new('ShaderNodeTexCoord')

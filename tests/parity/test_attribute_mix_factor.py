@@ -52,7 +52,7 @@ def _plane_scene(kind, source):
     """A subdivided plane filling an orthographic view, a float point attribute 'f' (a wave) and a
     random byte Color Attribute 'Col' on it; its material mixes two shaders (kind) by `source`:
     'attribute' (Attribute 'f' Fac) or 'color_ramp' (Color Attribute 'Col' into a Color Ramp)."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     mat, nt, out = scenes._material("Mixed")
     mix = _mix(nt, out, *_sides(nt, kind))
@@ -156,7 +156,7 @@ def test_object_info_random_mix_factor_per_object_and_instance(tmp_path, said):
     own value, as in Cycles (it had stood at 0.5 for all: (0.49, 0, 0.49) where Cycles' tiles
     range from (0.02, 0, 0.98) to (0.86, 0, 0.14))."""
     import bmesh        # importable once bpy is
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     mat, nt, out = scenes._material("ByObject")
     mix = _mix(nt, out, *_emissions(nt))

@@ -20,7 +20,7 @@ def _blocks(texture, vector, said):
     (a new node's bl_idname, its Vector fed by the output `vector` returns given the node
     tree) on a plane with two UV maps, the active 'UVMap' and 'Second', turned and squeezed;
     and what each render said (the last, DACRT's, kept in said)."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x = sc.render.resolution_y = 32
     scenes.camera((0, 0, 5), kind='ORTHO', ortho_scale=2.0)

@@ -84,7 +84,7 @@ def _blocks(a, k=4):
 def _plane_scene(make_mat, samples=16, size=4.0):
     """A plane (size x size, its UVs u along +x) of the material make_mat() seen from above, lit by
     a sun 20 degrees above it from +x."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     mat = make_mat()
     sc = bpy.context.scene
     sc.render.resolution_x = sc.render.resolution_y = 48
@@ -141,7 +141,7 @@ def _noise(scale=1.5, detail=0.0, coordinate=None):
 def test_a_noise_bump_on_a_smooth_sphere_matches_cycles(coordinate, tmp_path):
     """A Noise height (Generated, or Object coordinates) on a smooth UV sphere under a sun from
     the side: the gradient taken in the plane of each point's interpolated normal."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     mat = _bumped("Noisy", _noise(coordinate=coordinate), 'Fac', distance=0.5)
     sc = bpy.context.scene
     sc.render.resolution_x = sc.render.resolution_y = 48
@@ -281,7 +281,7 @@ def test_what_is_not_rendered_is_said(said, tmp_path):
             mat.displacement_method = 'DISPLACEMENT'
             return mat
         return material
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     for which in ('rendered', 'camera', 'two', 'true'):
         said.clear()
         sc = _plane_scene(make(which), samples=1)
@@ -302,7 +302,7 @@ def test_a_bump_under_a_white_world_with_bounces_matches_cycles(tmp_path):
     """A white world lights the bumped plane through light samples and BSDF rays alike (MIS),
     both taking the bump shadowing of the bent normal, and a bounce off a bumped wall: image
     within 1% of Cycles (64 spp)."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x = sc.render.resolution_y = 24
     scenes.camera(location=(0, -4, 3), rotation=(math.radians(55), 0, 0), lens=30.0)
@@ -325,7 +325,7 @@ def test_a_small_bumped_object_in_a_large_scene_matches_cycles(tmp_path):
     """A 10 cm sphere with a fine Noise height near a perspective camera, over a ground 2 km
     wide: the difference step follows the pixel footprint at the sphere (a share of the
     scene's extent would span the sphere's bumps)."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     mat = _bumped("Fine", _noise(scale=40.0, coordinate='Object'), 'Fac', distance=0.004)
     sc = bpy.context.scene
     sc.render.resolution_x = sc.render.resolution_y = 48

@@ -186,7 +186,7 @@ def _strand_scene(kind, samples=16):
     """Eight points of radius 0.2, or seven curves of radius 0.08, of a Diffuse bumped by a Noise
     on Object coordinates at distance 0.3, under a sun from the side."""
     from tests.addon import scenes
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     mat = _bumped("Bumped", _noise_on_object, 'Fac', distance=0.3)
     sc.render.resolution_x, sc.render.resolution_y = 64, 48

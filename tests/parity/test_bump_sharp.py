@@ -42,7 +42,7 @@ HEIGHTS = {'brick': _brick, 'clamped wave': _clamped_wave}
 def _scene(height):
     """A smooth UV sphere rotated off the axes, Diffuse 0.8 bumped (distance 0.3) by the height
     on Object coordinates, orthographic view, a sun of angle 0.05 and a grey world, 0 bounces."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x = sc.render.resolution_y = 48
     bpy.ops.mesh.primitive_uv_sphere_add(radius=1.0, segments=32, ring_count=16)

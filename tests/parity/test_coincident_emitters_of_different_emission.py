@@ -27,7 +27,7 @@ DIFFER = "the copies emit differently"
 def _scene(first, second):
     """The floor, a 1 m quad of Emission strength `first` facing it 1.5 m above, and a twin
     object on it (its own mesh, a copy) of strength `second`; black world, 0 bounces."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x, sc.render.resolution_y = 32, 24
     scenes.camera(location=(0, -4, 3), rotation=(math.radians(55), 0, 0))

@@ -21,7 +21,7 @@ SAID = "coincide exactly with other triangles"
 
 
 def _scene(mirrors):
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x, sc.render.resolution_y = 32, 24
     bpy.ops.mesh.primitive_cube_add()

@@ -62,7 +62,7 @@ def _render_both(sc, tmp_path, ortho_scale, samples):
 
 
 def test_colour_attributes_match_cycles(tmp_path):
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x, sc.render.resolution_y = 128, 32
     for i, case in enumerate(CASES):
@@ -99,7 +99,7 @@ def test_object_info_random_and_colour_match_cycles(tmp_path):
     the name), Color (the object's colour) on two more. Each cell's centre pixel agrees with
     Cycles within 1e-3 (direct sun light, exact per sample); the ramp is evaluated on each
     object's value, so any node chain is exact."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x, sc.render.resolution_y = 128, 32
     ramp_mat, nt, out = scenes._material("Ramp")

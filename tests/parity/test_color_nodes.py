@@ -153,7 +153,7 @@ def test_blackbody_emission_agrees_with_cycles(kelvin, tmp_path):
     noise): the export computes Cycles' blackbody fit (colornodes.blackbody) and agrees to
     float32 rounding. Before, the colour was the Emission socket's own white."""
     import bpy
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x = sc.render.resolution_y = 8
     scenes.camera(location=(0, 0, 5), kind='ORTHO', ortho_scale=1.0)

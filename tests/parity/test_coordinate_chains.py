@@ -18,7 +18,7 @@ pytestmark = pytest.mark.usefixtures('parity_addon')
 
 def _material(name):
     """A factory-empty file and a new material (its node tree, its output)."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     return scenes._material(name)
 
 

@@ -156,7 +156,7 @@ CASES = [
 
 def _render(cases, spp=16):
     """{engine: (len(cases), W, 3) per-column means of each case's strip}."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     n = len(cases)
     sc.render.resolution_x, sc.render.resolution_y = W, 4 * n

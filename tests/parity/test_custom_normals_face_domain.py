@@ -84,7 +84,7 @@ def _sharp_edges(sc):
 
 
 def _scene(build):
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x, sc.render.resolution_y = 64, 48
     scenes.camera((0.0, -5.5, 1.8), (math.radians(74), 0, 0), lens=30)

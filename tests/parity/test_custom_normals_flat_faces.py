@@ -21,7 +21,7 @@ pytestmark = pytest.mark.usefixtures('parity_addon')
 
 
 def _scene():
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x, sc.render.resolution_y = 64, 48
     scenes.camera((0.0, -4.0, 1.6), (math.radians(72), 0, 0), lens=30)

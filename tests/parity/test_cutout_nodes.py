@@ -35,7 +35,7 @@ def invert(nt, tex, m):
 @pytest.mark.parametrize("factor, transparent_first", [(color, True), (greater_than, True), (invert, False)],
                          ids=['color', 'greater_than', 'invert_swapped'])
 def test_cutout_factor_from_image_nodes_matches_cycles(tmp_path, factor, transparent_first):
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x = sc.render.resolution_y = 32
     scenes.camera((0, 0, 5), kind='ORTHO', ortho_scale=2.0)

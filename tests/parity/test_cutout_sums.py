@@ -98,7 +98,7 @@ def _sum_material(combine, cut, factor, other):
 def _scene(make_material, sheet_seen=True):
     """The 2 x 2 sheet of make_material()'s material (4 x 4 cells of 8 x 8 px) over a green floor, seen straight down
     (orthographic, 32 x 32), a tilted sun and a blue world (tests/parity/test_procedural_alpha)."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x = sc.render.resolution_y = 32
     scenes.camera((0, 0, 5), kind='ORTHO', ortho_scale=2.0)

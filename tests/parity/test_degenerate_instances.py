@@ -43,7 +43,7 @@ def _collection_instance(collection, name, location, scale):
 def _scene():
     """Linked duplicates of a sphere (front row) at scale 1 and flattened along y, and collection
     instances of another (back row) at scale 1, flattened and at 0, over a grey floor in a sun."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x, sc.render.resolution_y = 64, 40
     scenes.camera((0, -7.5, 4.0), (math.radians(62), 0, 0), lens=35)
@@ -100,7 +100,7 @@ def test_a_single_user_or_nearly_singular_placement_stays():
     """Export-level: a single-user mesh flattened (Cycles bakes it: a card) and a linked
     duplicate scaled 1e-6 (Cycles inverts it) keep their triangles; a flattened linked duplicate
     is left out."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     scenes.camera((0, -6, 0), (math.pi / 2, 0, 0))
     alone = _sphere("Alone")
     alone.scale = (1.0, 0.0, 1.0)

@@ -84,7 +84,7 @@ def test_emission_mask_matches_cycles(kind, tmp_path, said):
     """An upright mask plane over a grey floor under a sun: 8 px block means of the whole image
     (the mask seen by the camera, the floor it lights) within 3% (+0.01) of Cycles', the image
     mean within 1%, and nothing said about the Mix Shader factor."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x, sc.render.resolution_y = 64, 48
     scenes.camera(location=(0, -7, 4), rotation=(np.radians(60), 0, 0))
@@ -112,7 +112,7 @@ def test_emission_mask_matches_cycles(kind, tmp_path, said):
 def _said_for(tmp_path, said, first, second, kind):
     """DACRT's reports for a Mix Shader of node types first and second by a factor of `kind`
     on a tiny plane (no Cycles render: the message is the subject)."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     mat, nt, out = scenes._material("M")
     mix = nt.nodes.new('ShaderNodeMixShader')
     nt.links.new(_factor(nt, kind, tmp_path), mix.inputs['Fac'])

@@ -21,7 +21,7 @@ def _image(tmp_path):
 
 @pytest.mark.parametrize('shader', ['EMISSION', 'PRINCIPLED'])
 def test_image_emission_matches_cycles(shader, tmp_path):
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x, sc.render.resolution_y = 64, 48
     scenes.camera(location=(0, -7, 4), rotation=(np.radians(60), 0, 0))
@@ -72,7 +72,7 @@ def test_wide_gamut_emission_keeps_its_negative_channels(tmp_path, chart):
     (0, 1.042, 0) where Cycles has (-0.225, 1.042, -0.079); under AgX its PNG red 113 of 255,
     Cycles' 14. Where a channel's average over the image is negative (P3 green beside a dark
     purple), that channel of every texel had been dropped: the purple's red 0, Cycles' 0.125."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x, sc.render.resolution_y = 32, 8
     texels, columns = _CHARTS[chart]

@@ -29,7 +29,7 @@ def _pole_image():
 
 def _scene(rotation):
     import bpy
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     scenes.camera((0, 0, 10), rotation, kind='ORTHO')
     world = bpy.data.worlds.new("World")

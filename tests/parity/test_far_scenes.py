@@ -25,7 +25,7 @@ DIRECTION = np.array([1.0, 0.5, 0.25])
 
 
 def _room(offset, outlier=False, twin=False, camera_at=None):
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     scene = bpy.context.scene
     scene.render.resolution_x, scene.render.resolution_y = W, H
     o = offset * DIRECTION

@@ -18,7 +18,7 @@ _WALLS = (((2, 0, 1), (0, 1.5708, 0)), ((-2, 0, 1), (0, 1.5708, 0)),
 
 
 def _box_with_pane():
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x = sc.render.resolution_y = 16
     sc.render.resolution_percentage = 100

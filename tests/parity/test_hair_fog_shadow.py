@@ -28,7 +28,7 @@ def _fog(transparent_shadow=True):
 
 
 def _scene(kind, transparent_shadow=True):
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x, sc.render.resolution_y = 32, 24
     scenes.camera(location=(0, -6, 4), rotation=(math.radians(58), 0, 0))

@@ -15,7 +15,7 @@ pytestmark = pytest.mark.usefixtures('parity_addon')
 
 
 def test_depth_of_a_sheet_over_a_holdout_matches_cycles(tmp_path):
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x, sc.render.resolution_y = 16, 12
     cam = scenes.camera(location=(0, 0, 5), rotation=(0, 0, 0))

@@ -30,7 +30,7 @@ def _hair_material(model):
 
 
 def _scene(model, light):
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     m = _hair_material(model)
     scenes.point_cloud('Points', [(-0.7, 0, 0)], radius=0.5, material=m)

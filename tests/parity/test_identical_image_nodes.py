@@ -128,7 +128,7 @@ CONTROLS = (leaf_extend, leaf_other_scale)
 
 
 def _material(build, tmp_path):
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     mat = bpy.data.materials.new("M")
     nt = mat.node_tree
     bsdf = nt.nodes['Principled BSDF']

@@ -15,7 +15,7 @@ pytestmark = pytest.mark.usefixtures('parity_addon')
 
 @pytest.mark.parametrize('name', list(IRREGULAR))
 def test_irregular_profile_agrees(tmp_path, said, name):
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     lamp = scenes.light('POINT', 20.0, location=(0.0, 0.2, 1.6), rotation=(0.3, 0.0, 0.5), name='Fixture')
     lamp.data.use_nodes = True
     nt = lamp.data.node_tree

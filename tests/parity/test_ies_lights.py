@@ -100,7 +100,7 @@ CASES = [
 @pytest.mark.parametrize('kind, profile, source, rotation, props', CASES,
                          ids=[f'{k.lower()}-{p}-{s}{"-rotated" if any(r) else ""}' for k, p, s, r, _ in CASES])
 def test_ies_profile_agrees(tmp_path, said, kind, profile, source, rotation, props):
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     _lamp(kind, profile, source, tmp_path, rotation, **props)
     c = _agree(_render(tmp_path, said), said)
     # the profile shapes the light: its blocks differ far more than a bare lamp's falloff would
@@ -110,7 +110,7 @@ def test_ies_profile_agrees(tmp_path, said, kind, profile, source, rotation, pro
 def test_malformed_profile_is_named(tmp_path, said):
     """A file Cycles cannot load: Cycles lights it evenly at 100 x the node's Strength; so does
     DACRT, and says so naming the light and the file."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     (tmp_path / 'bad.ies').write_text("IESNA:LM-63-2002\nTILT=NONE\n1 1000 1 3 1 3 2 0 0 0\n1 1 50\n0 45 90\n0\n")
     lamp = _lamp('POINT', 'downlight', 'internal', tmp_path)
     ies = next(n for n in lamp.data.node_tree.nodes if n.type == 'TEX_IES')
@@ -125,7 +125,7 @@ def test_malformed_profile_is_named(tmp_path, said):
 def test_non_uniformly_scaled_lamp(tmp_path, said):
     """Under a non-uniform object scale Cycles takes the direction to the light's object space
     as a normal (M^T, not M^-1: the two differ there): a rotated point light scaled (1, 2.5, 0.4)."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     lamp = _lamp('POINT', 'asymmetric', 'internal', tmp_path, (0.4, 0.2, 0.7))
     lamp.scale = (1.0, 2.5, 0.4)
     _agree(_render(tmp_path, said), said)

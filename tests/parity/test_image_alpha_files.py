@@ -164,7 +164,7 @@ def test_environment_values_as_stored(tmp_path, said, ext, fmt, space, alpha_mod
     the sRGB TIFF, 4.3x / 4.0x / 3.3x Cycles')."""
     px = np.broadcast_to(np.array([0.3, 0.2, 0.1, 0.5], np.float32), (2, 4, 4)).copy()
     path, stored = _write(tmp_path / f"env.{ext}", px, fmt)
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     scenes.camera((0, 0, 5), (0, 0, 0), kind='ORTHO', ortho_scale=2.0)
     img = bpy.data.images.load(path)

@@ -27,7 +27,7 @@ def _scene(shape, kind='DIFFUSE'):
     scaled 1.2 x 0.8 x 1, seen in perspective under a sun, black world, 48 x 40 pixels; its
     material's shader of `kind` (Diffuse, Emission, Principled) and an Image Texture of a
     random 5 x 6 float RGBA image (alpha 0.2-1) on Linear. (node tree, shader, image node, obj)."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x, sc.render.resolution_y = 48, 40
     mat, nt, out = scenes._material("Projected")
@@ -184,7 +184,7 @@ def _two_image_diffuse_plane():
     """A 2x2 UV plane seen straight down (orthographic, 48 x 48) under a sun; its material two
     Diffuse BSDFs on two different 8-bit images (Closest), not yet combined: (node tree, output,
     first BSDF, second BSDF, second image node)."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x = sc.render.resolution_y = 48
     mat, nt, out = scenes._material("TwoImages")

@@ -121,7 +121,7 @@ def test_environment_lookup_blends_the_encoding(tmp_path):
     equirectangular camera: each pixel is the lookup at its direction, so the image mean is the
     mean of decode(blend(u)) over u (the closed form), and the engines' columns agree."""
     path = _write(tmp_path / "env.png", TEXELS[..., :3], 'uint8')
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     cam = scenes.camera((0, 0, 0), (0, 0, 0), kind='PANO')
     cam.data.panorama_type = 'EQUIRECTANGULAR'

@@ -27,7 +27,7 @@ def _planar_uvs(ob, scale):
 
 
 def _scene(kind):
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x, sc.render.resolution_y = 48, 32
     scenes.camera(location=(0, -6, 2), rotation=(math.radians(75), 0, 0), kind=kind)
@@ -146,7 +146,7 @@ def test_denoising_data_through_transparent_sheets_matches_cycles(tmp_path):
     features of a path that stops at that sheet on to its diffuse bounce, whose sky adds
     world x the sheet's colour to the albedo (here 0.451 / 0.169 in red / blue against Cycles'
     0.463 / 0.282); DACRT does not follow bounces for them."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x, sc.render.resolution_y = 32, 24
     scenes.camera(location=(0, 0, 5))

@@ -179,7 +179,7 @@ def at(img, x, y):
 
 
 def fresh():
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     return bpy.context.scene
 
 

@@ -22,7 +22,7 @@ MESSAGE = "Is Camera Ray / Is Shadow Ray"
 
 
 def _scene(kind, flag='Is Camera Ray'):
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x, sc.render.resolution_y, sc.render.resolution_percentage = 32, 24, 100
     sc.view_settings.view_transform, sc.view_settings.look = 'Standard', 'None'

@@ -18,7 +18,7 @@ pytestmark = pytest.mark.usefixtures('parity_addon')
 def lamp_over_floor(kind):
     """(scene, the lamp's node tree): a grey floor seen from above (orthographic, 32 x 32, 32
     spp, no bounces) under a lamp of kind named 'Lamp' with its nodes on."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x = sc.render.resolution_y = 32
     scenes.camera(location=(0, 0, 6), kind='ORTHO', ortho_scale=8.0)

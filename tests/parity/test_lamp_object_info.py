@@ -72,7 +72,7 @@ def _render(tmp_path, said):
 
 
 def _fresh():
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
 
 
 def _agree(means, said, tol=0.02):

@@ -23,7 +23,7 @@ SAID = "counts each light a ray meets as a transparent bounce"
 
 
 def _scene(transparent, hidden=False):
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x, sc.render.resolution_y = 40, 30
     scenes.camera(location=(0, -6, 4), rotation=(math.radians(56), 0, 0))

@@ -31,7 +31,7 @@ def _link(emitter, states, children=None):
 
 
 def _planes(emissive):
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x, sc.render.resolution_y = 30, 10
     scenes.camera(location=(0, 0, 10), kind='ORTHO', ortho_scale=6.0)
@@ -99,7 +99,7 @@ def test_light_linking_with_bounces_matches_cycles(tmp_path):
 def _blockers(emitter_kind, tinted):
     """A floor under two raised plates B (left) and C (right), hidden from the camera, lit from
     above by a sun or an area light; with tinted, C is a tinted transparent sheet."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x, sc.render.resolution_y = 30, 10
     scenes.camera(location=(0, 0, 10), kind='ORTHO', ortho_scale=6.0)

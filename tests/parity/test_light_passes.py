@@ -19,7 +19,7 @@ PASSES = ('Diffuse Direct', 'Diffuse Indirect', 'Diffuse Color', 'Emission', 'En
 
 
 def _scene(transparent):
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x, sc.render.resolution_y = 40, 30
     sc.render.film_transparent = transparent

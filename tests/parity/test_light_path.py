@@ -37,7 +37,7 @@ CASES = {   # Light Path output, first shader (factor 0), second (factor 1)
 
 @pytest.mark.parametrize('case', sorted(CASES))
 def test_ray_type_mix_matches_cycles(case, tmp_path):
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x, sc.render.resolution_y = 64, 48
     scenes.camera(location=(0, -6, 2.5), rotation=(math.radians(70), 0, 0))

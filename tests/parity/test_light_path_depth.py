@@ -21,7 +21,7 @@ _SAID = "Light Path Ray Depth read as 1 on every bounce"
 
 
 def _box(output, threshold):
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x = sc.render.resolution_y = 16
     sc.render.resolution_percentage = 100

@@ -45,7 +45,7 @@ def _floor_material(kind):
 
 @pytest.mark.parametrize('kind', ['diffuse_mix', 'emission_strength'])
 def test_light_path_keeps_the_procedural_rest_per_point(kind, tmp_path, said):
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x, sc.render.resolution_y = 64, 48
     scenes.camera(location=(0, -6, 2.5), rotation=(math.radians(70), 0, 0))

@@ -145,7 +145,7 @@ def _pane():
 
 
 def _scene(case):
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x, sc.render.resolution_y = 48, 36
     scenes.camera(location=(0, -6, 2.5), rotation=(math.radians(70), 0, 0))

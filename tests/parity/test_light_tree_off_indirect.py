@@ -28,7 +28,7 @@ PASSES = ('Combined', 'Diffuse Direct', 'Diffuse Indirect', 'Diffuse Color')
 
 def _scene():
     import bpy
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     scenes.camera((0, -6, 3), (math.radians(64), 0, 0), lens=50)
     m = scenes.diffuse("D", (0.8, 0.5, 0.3))
     scenes.uv_sphere("S", 1.0, location=(0, 0, 1), materials=(m,))

@@ -43,7 +43,7 @@ def glow_over_plate(sampling, blockers, samples, tmp_path):
     """A dim emissive plane (Emission Sampling `sampling`) 2 m over a floor, a plate hidden from
     the camera between them, the glow's blocker collection holding {object name: state}:
     (Cycles, DACRT) means of the floor under the plate, direct light only."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x = sc.render.resolution_y = 20
     scenes.camera(location=(0, 0, 10), kind='ORTHO', ortho_scale=4.0)
@@ -151,7 +151,7 @@ def test_64_receiver_sets(tmp_path):
     planes'), so two objects lost their links by memory order, and where A was one of them
     Cycles lit A and B alike with one lamp (0.0348, about 1 run in 30-65 in one process after
     other scenes). Here there are 7, and Cycles' image does not depend on memory order."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x, sc.render.resolution_y = 20, 10
     scenes.camera(location=(0, 0, 10), kind='ORTHO', ortho_scale=4.0)
@@ -189,7 +189,7 @@ def test_64_receiver_sets(tmp_path):
 
 def _glass_pane():
     """A clear glass pane (IOR 1) filling the view of a camera looking along +Y."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x, sc.render.resolution_y = 24, 18
     scenes.camera(location=(0, -5, 0), rotation=(math.pi / 2, 0, 0))

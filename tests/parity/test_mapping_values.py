@@ -44,7 +44,7 @@ def _square(kind, source, i, n):
 
 
 def test_mapping_node_values_match_cycles():
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     n = len(CASES)
     sc.render.resolution_x, sc.render.resolution_y = 8 * n, 8

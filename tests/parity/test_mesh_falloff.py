@@ -22,7 +22,7 @@ pytestmark = pytest.mark.usefixtures('parity_addon')
 
 
 def _scene(textured, smooth=0.0, through_math=False):
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x, sc.render.resolution_y = 64, 48
     scenes.camera(location=(0, -6, 2.5), rotation=(math.radians(70), 0, 0))

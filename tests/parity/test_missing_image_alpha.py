@@ -64,7 +64,7 @@ def _as_strength(nt, alpha, shader):
 @pytest.mark.parametrize("source", [_no_image, _missing_file, _missing_frame], ids=lambda f: f.__name__[1:])
 @pytest.mark.parametrize("use", [_as_color, _as_factor, _as_strength], ids=lambda f: f.__name__[4:])
 def test_a_missing_images_alpha_is_one_as_in_cycles(tmp_path, source, use, said):
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x = sc.render.resolution_y = 8
     scenes.camera((0, 0, 5), kind='ORTHO', ortho_scale=2.0)

@@ -58,7 +58,7 @@ def _reader(nt, out, reader, source, aov):
 def _scene(layer):
     """Six columns (OUTPUTS) by four rows (READERS) of planes with no attribute at all, each
     material reading `layer` ('' the render colour attribute / an unnamed Attribute)."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     vl = sc.view_layers[0]
     for i, (name, kind, output) in enumerate(OUTPUTS):

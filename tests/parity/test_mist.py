@@ -15,7 +15,7 @@ pytestmark = pytest.mark.usefixtures('parity_addon')
 
 
 def _scene(kind, falloff):
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x, sc.render.resolution_y = 48, 32
     scenes.camera(location=(0, -6, 2), rotation=(math.radians(75), 0, 0), kind=kind)

@@ -54,7 +54,7 @@ def _bump(nt, bsdf):
 def _scene(tmp_path, first, second, fac):
     """A 4 x 2 plane of Mix(fac) of two Principled BSDFs, each with 'nmap', 'bump' or nothing
     on its Normal, under a sun from +x 35 degrees off vertical; 64 x 32 pixels."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     mat, nt, out = scenes._material("Layered")
     img = _normal_image(tmp_path)
     a, b = _bsdf(nt, (0.8, 0.3, 0.2)), _bsdf(nt, (0.2, 0.5, 0.8))

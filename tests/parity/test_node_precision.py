@@ -89,7 +89,7 @@ def _square(name, chain, i, n):
 
 
 def test_step_edges_land_where_cycles_puts_them():
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     n = len(CHAINS)
     sc.render.resolution_x, sc.render.resolution_y = 8 * n, 8

@@ -24,7 +24,7 @@ def _normal_image(tmp_path):
 
 @pytest.mark.parametrize('strength,mirrored', [(1.0, False), (0.5, False), (1.0, True), (0.0, False)])
 def test_normal_map_matches_cycles(strength, mirrored, tmp_path):
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x, sc.render.resolution_y = 64, 32
     scenes.camera(location=(0, 0, 5), kind='ORTHO', ortho_scale=4.2)
@@ -61,7 +61,7 @@ def test_normal_map_matches_cycles(strength, mirrored, tmp_path):
 def test_normal_map_under_a_world_matches_cycles(tmp_path):
     """A white world lights the tilted halves through light samples and BSDF rays alike (MIS),
     so both take Cycles' bump shadowing: each half within 1% (256 spp)."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x, sc.render.resolution_y = 32, 16
     scenes.camera(location=(0, 0, 5), kind='ORTHO', ortho_scale=4.2)
@@ -81,7 +81,7 @@ def test_normal_map_under_a_world_matches_cycles(tmp_path):
 def test_normal_map_on_a_smooth_sphere_matches_cycles(tmp_path):
     """Tangents of a smooth UV sphere (Blender's mikktspace, per corner, interpolated) with one
     tilted texel everywhere, under a sun from the side: the tilt follows the tangent field."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x = sc.render.resolution_y = 48
     sc.render.film_transparent = True
@@ -112,7 +112,7 @@ def test_normal_map_on_a_scaled_plane_matches_cycles(scale, tmp_path):
     matrix (M^-T): under a non-uniform scale the world-space tilt is not the object-space one
     (a plane scaled (0.5, 0.5, 1) tilts twice as far). The bent normals as Cycles writes them,
     and the plane's brightness."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x, sc.render.resolution_y = 64, 32
     scenes.camera(location=(0, 0, 5), kind='ORTHO', ortho_scale=4.2 * max(scale[0], scale[1]) / 2)

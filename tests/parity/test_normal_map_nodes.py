@@ -38,7 +38,7 @@ def _curves_flip_green(nt, tex):
 
 @pytest.mark.parametrize('flip', [_flip_green, _curves_flip_green], ids=['separate_math_combine', 'rgb_curves'])
 def test_directx_normal_map_flipped_by_nodes_matches_cycles(tmp_path, flip):
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x, sc.render.resolution_y = 64, 32
     scenes.camera(location=(0, 0, 5), kind='ORTHO', ortho_scale=4.2)

@@ -93,7 +93,7 @@ def test_normal_map_space_and_colour_chain_matches_cycles(tmp_path, space, colou
 
 
 def _render_and_compare(tmp_path, space, colour, strength):
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x, sc.render.resolution_y = 48, 24
     scenes.camera(location=(0, 0, 6), kind='ORTHO', ortho_scale=5.0)
@@ -158,7 +158,7 @@ def _curves_flip_green(nt, socket):
 def test_object_and_world_space_image_normal_maps_match_cycles(tmp_path, space, through):
     """A baked object- or world-space normal map: an image of directions on the UV map (directly,
     or through RGB Curves), on a sphere rotated and scaled unevenly. It had been ignored."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x, sc.render.resolution_y = 32, 32
     scenes.camera(location=(0, 0, 6), kind='ORTHO', ortho_scale=2.6)

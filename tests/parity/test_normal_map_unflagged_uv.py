@@ -86,7 +86,7 @@ def _lit(sc):
 
 
 def test_gn_mesh_unflagged_uv_map_message_names_the_cause(tmp_path, said):
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     _gn_grid(_material(tmp_path))
     sc = bpy.context.scene
     _lit(sc)
@@ -101,7 +101,7 @@ def test_gn_mesh_unflagged_uv_map_message_names_the_cause(tmp_path, said):
 def test_gn_mesh_with_the_map_named_matches_cycles(tmp_path, said):
     """The Normal Map node and the image's UV Map node naming 'UVMap': that map's tangents in
     both engines, 8-px blocks within 0.01 of Cycles' (the tilt moves them by 0.1-0.3)."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     _gn_grid(_material(tmp_path, 'UVMap'))
     sc = bpy.context.scene
     _lit(sc)
@@ -116,7 +116,7 @@ def test_gn_mesh_with_the_map_named_matches_cycles(tmp_path, said):
 def test_text_object_normal_map_matches_cycles(tmp_path, said):
     """A text object's mesh has its own UV map active for render ('UVMap'): the normal map is
     rendered on its tangents, as in Cycles (mean within 1%, nothing said)."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     curve = bpy.data.curves.new("Label", 'FONT')
     curve.body = "HM"
@@ -135,7 +135,7 @@ def test_text_object_normal_map_matches_cycles(tmp_path, said):
 
 def test_metaball_message_names_the_cause(tmp_path, said):
     """A metaball's mesh has no UV map: Cycles' sphere-mapped tangents, said (not applied here)."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     mb = bpy.data.metaballs.new("Blob")
     mb.elements.new()

@@ -79,7 +79,7 @@ def _plane(name, location, mat):
 
 
 def _scene():
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x, sc.render.resolution_y = 128, 64
     colour = _material("Colour", _info('Color'), 1)
@@ -146,7 +146,7 @@ def test_image_times_object_info_renders_per_texel_and_per_object(tmp_path, said
 def test_image_mixed_by_random_is_said_as_what_it_is(tmp_path, said):
     """Mix(Random, tint, image) is no product of the value and the image: still approximated
     (the image as its average), said so, naming the Object Info output, not 'two images'."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x = sc.render.resolution_y = 8
     mat, nt, out = scenes._material("RandomMix")

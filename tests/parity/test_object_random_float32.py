@@ -18,7 +18,7 @@ SPLIT = ['Tile580', 'Tile615', 'Tile803', 'Tile1329', 'Tile1398', 'Tile1399', 'T
 
 
 def _scene():
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     scenes.camera((0, 0, 5), (0, 0, 0), kind='ORTHO', ortho_scale=2.0)
     mat, nt, out = scenes._material("RandomGlow")

@@ -32,7 +32,7 @@ def _floor_inside_a_sphere(tmp_path, sun, card, hidden):
     the camera, else a half-transparent one it sees; card: a half-transparent card beside the
     sphere, so shadow rays also take the transparent-shadow pass (the rays let through had kept
     the occlusion query's length of -1 there: the render failed)."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x = sc.render.resolution_y = 24
     scenes.camera(location=(0, 0, 6), kind='ORTHO', ortho_scale=2.0)

@@ -31,7 +31,7 @@ def _material():
 
 
 def test_pointiness_matches_cycles():
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x, sc.render.resolution_y = 96, 32
     scenes.camera((0.0, -7.0, 2.5), rotation=(1.22, 0.0, 0.0), lens=40)

@@ -18,7 +18,7 @@ pytestmark = pytest.mark.usefixtures('parity_addon')
 
 
 def _scene():
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x = sc.render.resolution_y = 96
     sc.render.film_transparent = True

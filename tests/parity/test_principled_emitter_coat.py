@@ -102,7 +102,7 @@ def test_lamp_principled_tree_under_coat_lights_as_cycles(tmp_path, layers):
     as Cycles' does, per channel within 1.5% (measured 0.1%): a light's shader is evaluated
     emission-only, so only the coat tint shows. It had been 0.908x (coat) and 0.883x (sheen),
     0.91x in the tint's untouched blue."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x, sc.render.resolution_y = 48, 36
     scenes.plane("Floor", size=6.0, materials=(scenes.diffuse("Floor", (0.8, 0.8, 0.8)),))

@@ -32,7 +32,7 @@ def _emission_plane(texture_type, output, settings, wire=None):
     """The scene: a 4x4 plane (object coordinates -2..2) emitting texture_type's output; wire(nt,
     texture coordinate node, texture node) links the texture's inputs instead of Object
     coordinates (moved by settings' 'offset')."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     mat, nt, out = scenes._material("Emitter")
     em = nt.nodes.new('ShaderNodeEmission')

@@ -70,7 +70,7 @@ def _noise_greater_than(nt, fac, coords):
 def _sheet_scene(make_material, floor=True):
     """The 2 x 2 sheet of make_material()'s material seen straight down by an orthographic camera that frames it
     (32 x 32 pixels, 8 a cell), over a green floor (or nothing), a sun and a blue world."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x = sc.render.resolution_y = 32
     scenes.camera((0, 0, 5), kind='ORTHO', ortho_scale=2.0)
@@ -121,7 +121,7 @@ def test_noise_cutout_shadow_on_the_floor(tmp_path, said):
     from the camera: the floor's mean within 2% of Cycles' (measured 0.15%), 4 x 4 blocks of its
     shadow pattern within 5% of the brightest (1.0%). It had cast a uniform half shadow: the
     mean 0.5% off, blocks 28%."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x = sc.render.resolution_y = 32
     scenes.camera((0, 0, 6), kind='ORTHO', ortho_scale=2.0)
@@ -146,7 +146,7 @@ def test_principled_alpha_from_gradient_on_object(tmp_path, said):
     turned, scaled plane, over a green floor: 4 x 4 blocks within 2% of Cycles' brightest
     (measured 0.3%), the mean within 2% (0.06%). It had read the Alpha's own value (opaque): the
     mean 41% off, blocks 71%."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     mat, nt, out = scenes._material("Fade")
     p = nt.nodes.new('ShaderNodeBsdfPrincipled')

@@ -65,7 +65,7 @@ def _floor_and_emitter(make_material, camera_sees_emitter, emitter=None):
     """A 6 x 6 grey floor under an emitter 1.2 above it, facing down (a 2 x 2 plane unless
     emitter(material) makes one), of the material make_material() makes, seen from above at an
     angle; a black world."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     emitter_material = make_material()
     sc.render.resolution_x, sc.render.resolution_y = 48, 36

@@ -78,7 +78,7 @@ def test_jittered_quads_bend_normals_as_cycles(smooth, atol, tmp_path):
     """Largest block difference of the bent normal, before / after: smooth 0.015 / 0.0006, flat
     0.110 / 0.009 (a flat triangle's own normal, as Cycles takes it; its edges make that pass
     noisier)."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     _quad_grid(tmp_path, 0.3, smooth)
     n = _normals(tmp_path)
     assert np.abs(n['CYCLES'] - n['CYCLES'].mean((0, 1))).max() > 0.2, "the map must bend the normals"
@@ -92,7 +92,7 @@ def test_flat_quads_among_smooth_ones_bend_normals_as_cycles(sharp_edge_every, t
     normals CORNER, the split corner normals (a flat face's its normal) with sharp edges too;
     Blender's calc_tangents had read its corner normals, split at every flat face. Largest
     block difference, before / after: 0.054 / 0.005, with sharp edges 0.019 / 0.004."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     _quad_grid(tmp_path, 0.3, True, flat_every=3, sharp_edge_every=sharp_edge_every)
     n = _normals(tmp_path)
     np.testing.assert_allclose(n['DACRT'], n['CYCLES'], atol=0.01)
@@ -103,7 +103,7 @@ def test_planar_quads_under_a_warped_uv_map_bend_normals_as_cycles(tmp_path):
     quad's two triangles have other tangents, which mikktspace on the faces averaged: 0.160
     before, 0.003 after. (Planar quads mapped affinely keep Blender's calc_tangents on the
     faces: the same tangents, no temporary mesh.)"""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     me = _quad_grid(tmp_path, 0.0, True).data
     co = np.array([v.co[:] for v in me.vertices])
     x, y = co[[c.vertex_index for c in me.loops]].T[:2]
@@ -117,7 +117,7 @@ def test_flat_mapped_quads_are_told_apart():
     """_flat_mapped_quads: planar quads mapped affinely (a default grid) take calc_tangents on
     the faces; a lifted corner or a warped UV map does not."""
     from addon.export import meshes
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     bpy.ops.mesh.primitive_grid_add(x_subdivisions=4, y_subdivisions=4, size=2, rotation=(0.3, 0.2, 0.1))
     me = bpy.context.active_object.data
 
@@ -135,7 +135,7 @@ def test_flat_mapped_quads_are_told_apart():
 def test_wave_deformed_quads_bend_normals_as_cycles(tmp_path):
     """An animated Wave modifier at frame 9 (planar quads on frame 1, bent ones after): 0.009
     before, 0.0009 after."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     ob = _quad_grid(tmp_path, 0.0, True)
     wave = ob.modifiers.new("Wave", 'WAVE')
     wave.height, wave.width, wave.speed = 0.8, 1.2, 0.4

@@ -59,7 +59,7 @@ def _material(kind):
 
 
 def test_random_per_island_matches_cycles():
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x, sc.render.resolution_y = 16 * COLUMNS, 16 * 2 * ROWS
     scenes.camera((0, 0, 10), kind='ORTHO', ortho_scale=2.0 * COLUMNS)

@@ -59,7 +59,7 @@ CASES = {'hidden_panels': _hidden_panels, 'noshadow_plate': _noshadow_plate, 'ca
 
 
 def _scene(case, limit):
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x, sc.render.resolution_y, sc.render.resolution_percentage = 64, 48, 100
     scenes.camera(location=(0, -6, 2.5), rotation=(math.radians(70), 0, 0))

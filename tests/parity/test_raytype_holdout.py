@@ -14,7 +14,7 @@ pytestmark = pytest.mark.usefixtures('parity_addon')
 
 
 def test_camera_holdout_matte_matches_cycles(tmp_path):
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x, sc.render.resolution_y = 32, 32
     mat, nt, mix, a, b = scenes.mix_shader_material("Matte", 'ShaderNodeBsdfDiffuse', 'ShaderNodeHoldout')

@@ -21,7 +21,7 @@ CASES = {   # Light Path output, first shader (factor 0), second (factor 1)
 
 @pytest.mark.parametrize('case', sorted(CASES))
 def test_ray_type_mix_with_transparent_shadows_off_casts_shadows(case, tmp_path):
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x, sc.render.resolution_y = 32, 32
     output, first, second = CASES[case]

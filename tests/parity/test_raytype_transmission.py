@@ -50,7 +50,7 @@ def _glass(ior=1.0):
 
 @pytest.mark.parametrize('case', sorted(CASES))
 def test_ray_type_mix_behind_glass_matches_cycles(case, tmp_path):
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x, sc.render.resolution_y = 48, 32
     # ortho camera at y = -5 looking along +y; the panel (at y = 2) fills the view, a clear

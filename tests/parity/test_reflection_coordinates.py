@@ -51,7 +51,7 @@ def _material(kind):
 def coordinates_view(**camera):
     """(scene, camera) of the coordinate tests: an empty 64 x 32 scene seen from (0.5, -6, 2)
     by a 35 mm lens (camera: scenes.camera's other keywords)."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x, sc.render.resolution_y = 64, 32
     return sc, scenes.camera((0.5, -6.0, 2.0), rotation=(1.25, 0.0, 0.08), lens=35, **camera)

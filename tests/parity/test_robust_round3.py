@@ -12,7 +12,7 @@ pytestmark = pytest.mark.usefixtures('parity_addon')
 
 
 def _scene(res=(16, 12), samples=16):
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x, sc.render.resolution_y = res
     sc.view_settings.view_transform = 'Standard'

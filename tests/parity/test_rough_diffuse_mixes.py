@@ -55,7 +55,7 @@ def _material(factor):
 def build(factor, samples=128):
     """The UV-mapped plane (40 x 40) seen from 30 degrees up by an orthographic camera, a sharp
     sun 35 degrees up facing the view, a black world."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     e = math.radians(30)
     scenes.camera((0, -10 * math.cos(e), 10 * math.sin(e)), (math.pi / 2 - e, 0, 0), kind='ORTHO', ortho_scale=1.5)

@@ -46,7 +46,7 @@ def _mixed(name):
 
 
 def _scene():
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x, sc.render.resolution_y = 40, 30
     scenes.camera(location=(0, -6, 2.0), rotation=(math.radians(90), 0, 0), kind='PERSP')

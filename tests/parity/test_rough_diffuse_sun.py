@@ -54,7 +54,7 @@ def build(view, light, roughness, colour, kind='plain', samples=4):
     """The plane (UV-mapped, 40 x 40) seen from `view` degrees above it (from -Y), lit by
     light: ('sun', elevation, +1 behind the viewer / -1 facing it), ('point', z), ('area', z)
     or ('world',)."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     e = math.radians(view)
     scenes.camera((0, -10 * math.cos(e), 10 * math.sin(e)), (math.pi / 2 - e, 0, 0), kind='ORTHO', ortho_scale=0.5)

@@ -50,7 +50,7 @@ def _diffuse(name, color):
 
 def _build():
     """The tester's scene at 48 x 36, with the fair settings (clamps off, no terminator offsets)."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     scene = bpy.context.scene
     bpy.ops.mesh.primitive_plane_add(size=20)
     bpy.context.object.data.materials.append(_diffuse('Floor', (0.5, 0.5, 0.5)))

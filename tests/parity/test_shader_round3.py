@@ -28,7 +28,7 @@ def _direct_box(sc, samples):
 def _scene(wire, shader='emission', setup=None):
     """A 2x2 grid (8x8 quads) filling the view, its material's Emission Color (or Diffuse Color
     under a sun, shader='diffuse') fed by wire(tree) -> socket; setup(object) before."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x = sc.render.resolution_y = RES
     bpy.ops.mesh.primitive_grid_add(x_subdivisions=8, y_subdivisions=8, size=2.0)
@@ -135,7 +135,7 @@ def test_negative_attribute_values_through_nodes(tmp_path, said):
 def _strip(wires, tmp_path, samples=4):
     """One emissive 2x2 grid per wire(tree) -> socket (its Emission Color) in a row, seen from
     above; {engine: (n, 32, 32, 3)} each grid's pixels."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     n = len(wires)
     sc.render.resolution_x, sc.render.resolution_y = RES * n, RES
@@ -399,7 +399,7 @@ def test_nan_alpha_is_transparent(tmp_path):
     texel (NaN texels through a Math node) are 0 in Cycles: the Principled fully transparent,
     the Mix its first shader. DACRT had read them as 1: the Principled opaque (0.64 where
     Cycles shows the grey world, 0.30), the Mix its second shader."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     kinds = ('principled', 'mix_first_clear', 'mix_second_clear')
     sc.render.resolution_x, sc.render.resolution_y = RES * len(kinds), RES

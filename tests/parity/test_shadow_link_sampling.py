@@ -79,7 +79,7 @@ def test_lamp_behind_an_unlisted_object(kind, props, tmp_path):
     it Cycles has the light samples' MIS share only. DACRT had lit shadow-linked lamps by light
     samples alone at weight 1, the whole light: brighter there (a fuzz scene with two 1.8 m soft
     point lamps: 1.03-1.05x Cycles by an object in no blocker collection)."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x = sc.render.resolution_y = 20
     scenes.camera(location=(0, 0, 10), kind='ORTHO', ortho_scale=4.0)

@@ -18,7 +18,7 @@ pytestmark = pytest.mark.usefixtures('parity_addon')
 
 
 def _scene(case):
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x, sc.render.resolution_y = 40, 30
     scenes.camera(location=(5, -5, 4), rotation=(math.radians(58), 0, math.radians(45)))

@@ -29,7 +29,7 @@ W, H = 48, 36
 
 def _scene(kind='PERSP', samples=1, emission=False, clip=(0.1, 1000.0), pano=None):
     """A floor and a block seen by a camera under a rotated empty scaled (1, 2, 0.5)."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x, sc.render.resolution_y = W, H
     cam = scenes.camera(location=(0, -6, 4), rotation=(math.radians(50), 0, 0.2), kind=kind, ortho_scale=9.0)
@@ -174,7 +174,7 @@ def test_sheared_camera_rays_follow_cycles_formulas(kind, aperture):
 def test_camera_under_a_flattened_parent_renders(tmp_path):
     """A parent scaled to 0 on one axis leaves the camera's columns coplanar: no inverse. It
     renders (Cycles does too; its Depth there is arbitrary), its Combined as Cycles'."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x, sc.render.resolution_y = 16, 12
     cam = scenes.camera(location=(0, -6, 4), rotation=(math.radians(50), 0, 0.2))

@@ -73,7 +73,7 @@ def _around_a_plane():
     """The panoramic camera at the origin and a white diffuse 4 x 4 square 1 below it (seen
     below -19.5 degrees)."""
     import bpy
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     cam = scenes.camera((0, 0, 0), (math.pi / 2, 0, 0), kind='PANO')
     cam.data.panorama_type = 'EQUIRECTANGULAR'
     mat, nt, out = scenes._material("White")
@@ -114,7 +114,7 @@ def test_sky_around_and_on_a_plane(kind, elevation, disc, tmp_path):
 def test_sun_disc_zoomed(kind, elevation, tmp_path):
     import bpy
     import mathutils
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     e, rot = math.radians(elevation), math.radians(ROTATION)
     to_sun = mathutils.Vector((math.cos(e) * math.sin(rot), math.cos(e) * math.cos(rot), math.sin(e)))
     cam = scenes.camera((0, 0, 0), (0, 0, 0), lens=825.0)      # 2.5 degrees across

@@ -26,7 +26,7 @@ pytestmark = pytest.mark.usefixtures('parity_addon')
 @pytest.mark.parametrize('altitude', (0.0, 100.0))
 def test_ground_below_the_horizon(altitude, tmp_path):
     import bpy
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x, sc.render.resolution_y, sc.render.resolution_percentage = 64, 48, 100
     vs = sc.view_settings

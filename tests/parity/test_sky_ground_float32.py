@@ -33,7 +33,7 @@ pytestmark = pytest.mark.usefixtures('parity_addon')
 ])
 def test_ground_seen_from_a_low_altitude_agrees_with_cycles(altitude, air, dust, ozone, elevation, tmp_path):
     import bpy
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x, sc.render.resolution_y, sc.render.resolution_percentage = 36, 36, 100
     cam = scenes.camera(location=(0, 0, 0), rotation=(0, 0, 0), lens=15.0)

@@ -25,7 +25,7 @@ W, H = 64, 32
 
 def _level_view(kind, sun=(0.0, 0.0, 1.0), elevation=15.0):
     import bpy
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     scenes.camera((0, 0, 0), (math.pi / 2, 0, math.radians(20)), lens=343.0)  # 6 x 3 degrees
     world = bpy.data.worlds.new("Sky")
     bpy.context.scene.world = world

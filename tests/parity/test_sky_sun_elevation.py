@@ -82,7 +82,7 @@ def _scene(kind, elevation, size=None):
     """A ball on a floor under a sky of this kind, its sun disc at elevation (degrees) and size
     (degrees; None: the default), fair settings (also test_sky_small_sun's)."""
     import bpy
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x, sc.render.resolution_y, sc.render.resolution_percentage = 32, 24, 100
     vs = sc.view_settings

@@ -22,7 +22,7 @@ def sphere_scene(make_material):
     """A fresh scene: a sphere of make_material() (made after the factory reset, which would
     remove one made before) under a uniform white world, seen by an orthographic camera, with
     no bounces past the first and a transparent film (_disk_means)."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     mat = make_material()
     sc = bpy.context.scene
     sc.render.resolution_x = sc.render.resolution_y = 48

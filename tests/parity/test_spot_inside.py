@@ -15,7 +15,7 @@ pytestmark = pytest.mark.usefixtures('parity_addon')
 
 @pytest.mark.parametrize('case', ['soft', 'mis_off'])
 def test_floor_inside_a_spot_matches_cycles(case, said):
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x, sc.render.resolution_y = 40, 30
     scenes.camera(location=(0, 0, 5), kind='ORTHO', ortho_scale=2.0)

@@ -37,7 +37,7 @@ BOTTOM_LEFT, TOP_RIGHT, CENTRE = (slice(4, 12), slice(4, 12)), (slice(20, 28), s
 def _scene():
     """A factory-empty scene: orthographic camera above the origin seeing 1.8 x 1.8, a white
     world; returns (scene, material node tree, Diffuse node) of the plane's new material."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x = sc.render.resolution_y = RES
     sc.render.resolution_percentage = 100

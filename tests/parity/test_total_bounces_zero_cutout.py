@@ -18,7 +18,7 @@ pytestmark = pytest.mark.usefixtures('parity_addon')
 
 
 def _card_over_floor():
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x, sc.render.resolution_y, sc.render.resolution_percentage = 48, 36, 100
     sc.view_settings.view_transform, sc.view_settings.look = 'Standard', 'None'

@@ -19,7 +19,7 @@ pytestmark = pytest.mark.usefixtures('parity_addon')
 
 
 def _leaf_scene(translucent=(0.6, 0.8, 0.2), diffuse=(0.2, 0.5, 0.1), fac=0.5, clear=0.0):
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x, sc.render.resolution_y = 64, 48
     scenes.camera(location=(0, -6, 1.5), rotation=(math.radians(82), 0, 0))

@@ -17,7 +17,7 @@ pytestmark = pytest.mark.usefixtures('parity_addon')
 
 @pytest.mark.parametrize('clear', [0.0, 0.4])
 def test_smooth_translucent_cube_lit_from_behind_matches_cycles(tmp_path, clear):
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x, sc.render.resolution_y = 40, 30
     scenes.camera(location=(0, -6, 1), rotation=(1.4, 0, 0))

@@ -20,7 +20,7 @@ pytestmark = pytest.mark.usefixtures('parity_addon')
 
 
 def _scene(bounces, veil=False):
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x = sc.render.resolution_y = 48
     scenes.camera(location=(0, -5, 0.5), rotation=(math.radians(84), 0, 0))
@@ -58,7 +58,7 @@ def test_translucent_bounces_end_at_the_transmission_limit(bounces, veil):
 
 def _panes(bounces):
     """Two clear glass panes (IOR 1.0001) before an emitting backdrop, nothing else lit."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x = sc.render.resolution_y = 24
     scenes.camera(location=(0, -4, 1.0), rotation=(math.radians(90), 0, 0))

@@ -21,7 +21,7 @@ pytestmark = pytest.mark.usefixtures('parity_addon')
 
 
 def _shell_scene(base, transmission, roughness, ior=1.5, metallic=0.0, coat=0.0):
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x = sc.render.resolution_y = 48
     sc.render.film_transparent = False

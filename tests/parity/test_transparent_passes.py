@@ -17,7 +17,7 @@ pytestmark = pytest.mark.usefixtures('parity_addon')
 
 
 def _scene(alpha, emission=0.0):
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x, sc.render.resolution_y = 32, 24
     scenes.camera(location=(0, -6, 3), rotation=(math.radians(60), 0, 0), kind='PERSP')

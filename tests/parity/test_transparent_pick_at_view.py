@@ -18,7 +18,7 @@ pytestmark = pytest.mark.usefixtures('parity_addon')
 
 
 def _passing_share(tmp_path, engine, metallic, tilt):
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x, sc.render.resolution_y = 16, 12
     d = 5.0

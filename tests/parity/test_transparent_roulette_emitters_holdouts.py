@@ -24,7 +24,7 @@ def _scene(min_transparent, emitter_fac, holdout=False):
     (orthographic), black world; emitter_fac: None for a plain Emission floor, else the factor
     of a Mix Shader of Emission and Transparent BSDF (the floor transparent itself), or 'diffuse'
     (a grey Diffuse floor); holdout: the floor a holdout object, the film transparent."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x, sc.render.resolution_y = 32, 24
     scenes.camera(location=(0, 0, 8), kind='ORTHO', ortho_scale=6.0)

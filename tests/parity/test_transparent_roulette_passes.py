@@ -33,7 +33,7 @@ def _material(name, color, transparent=None):
 def _scene(min_transparent):
     """A floor (2 x 2) under two sheets (3 x 3, alpha 0.4, below the Pass Alpha Threshold 0.5)
     seen from straight above, transparent film (the sheets' rim shows the background)."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x, sc.render.resolution_y = 64, 48
     sc.render.film_transparent = True

@@ -27,7 +27,7 @@ def _setup(sc, samples, width, height):
 
 
 def test_a_strand_seen_near_its_axis_shows_no_inside(tmp_path):
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     t = np.linspace(0, 1, 4)[:, None]
     scenes.hair_curves('Hair', [t * [0.05, 0.3, 0.0]], radius=0.01, material=scenes.emission('e', (1, 1, 1), 1.0))
@@ -39,7 +39,7 @@ def test_a_strand_seen_near_its_axis_shows_no_inside(tmp_path):
 
 
 def test_hair_pointing_at_the_camera_covers_what_cycles_covers(tmp_path):
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     rng = np.random.default_rng(1)
     base = np.stack([rng.uniform(-0.05, 0.05, 3000), np.zeros(3000), rng.uniform(-0.05, 0.05, 3000)], 1)

@@ -55,7 +55,7 @@ def albedo_plane_blocks(colour):
     (no specular layer) takes its Base Color from colour(node tree), under a white world without
     bounces (radiance = albedo), seen square by an orthographic camera at 32 x 32, 64 spp.
     Returns {engine: 4 x 4 block means (4, 4, 3)}."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x = sc.render.resolution_y = 32
     scenes.camera((0, 0, 5), kind='ORTHO', ortho_scale=2.0)

@@ -113,7 +113,7 @@ class _Tree:
 def _scene(seed, tmp_path):
     """One sphere of seed's random material 'M' over a grey floor, an area light and a bluish
     world, 40 x 32 pixels, 32 spp, one bounce."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x, sc.render.resolution_y = 40, 32
     scenes.plane("Floor", size=14.0, location=(0, 0, -1.0), materials=(scenes.diffuse("Floor", (0.5, 0.5, 0.5)),))

@@ -44,7 +44,7 @@ def _square(op, i, n):
 
 
 def test_vector_math_operations_match_cycles():
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     n = len(OPERATIONS)
     sc.render.resolution_x, sc.render.resolution_y = 2 * n, 4

@@ -44,7 +44,7 @@ def _normal_image(tmp_path):
 def _scene(tmp_path, operation, values, uv_input):
     """A 4 x 4 plane (Diffuse 0.8) whose normal map's image reads the UV map through one Vector
     Math node, under a low sun from +x, seen from above; 48 x 48 pixels."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     mat = scenes.normal_map_material("Tiled", _normal_image(tmp_path))
     nt = mat.node_tree
     tex = next(n for n in nt.nodes if n.type == 'TEX_IMAGE')

@@ -113,7 +113,7 @@ def _blocks(img, n=4):
 
 @pytest.mark.parametrize('case', list(CASES))
 def test_joined_fans_share_cycles_vertex_normal(case, tmp_path):
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     verts, faces, sharp, cam, target = CASES[case]
     _mesh(verts, faces, sharp, _normal_emission(), _free_normals if case.startswith('free') else None)
@@ -131,7 +131,7 @@ def test_joined_fans_share_cycles_vertex_normal(case, tmp_path):
 def test_bowtie_under_a_point_light_matches_cycles(tmp_path):
     """The report's case: a floor and a wall sharing a vertex, wall first, a point light, direct
     light only. Before: DACRT 0.10426 vs Cycles 0.09389 (1.11)."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     verts, faces, sharp, cam, target = CASES['bowtie wall first']
     _mesh(verts, faces, sharp, _diffuse())

@@ -80,7 +80,7 @@ def _material(kind, value, use):
 def _scene(kind, value, use='diffuses', light='area', smooth=True, bowl=False, normal=None):
     """The sphere (bowl: its half towards the camera removed, so the camera sees its inside, back
     faces) of the material over a grey floor; normal: a Geometry output into the node's Normal."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x = sc.render.resolution_y = SIZE
     scenes.camera(location=(0, -5, 0.5), rotation=(math.radians(84), 0, 0))

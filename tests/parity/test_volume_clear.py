@@ -33,7 +33,7 @@ def _fog_material(transparent_shadow=True):
 
 
 def _scene(slabs, transparent_max=8, transparent_shadow=True, sun=False):
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x, sc.render.resolution_y = 32, 24
     layer = sc.view_layers[0]

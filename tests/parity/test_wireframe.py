@@ -59,7 +59,7 @@ def _material(kind):
 
 
 def test_wireframe_matches_cycles():
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x, sc.render.resolution_y = 32 * N, 32
     scenes.camera((0, 0, 10), kind='ORTHO', ortho_scale=2.0 * N)

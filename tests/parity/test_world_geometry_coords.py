@@ -35,7 +35,7 @@ def environment_world():
     setting for both engines; returns (world node tree, its Environment Texture node) for the
     caller to link a vector into (also test_wavelength_rotate's)."""
     import bpy
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     cam = scenes.camera((0, 0, 0), (math.radians(80), 0, math.radians(30)), kind='PANO')
     cam.data.panorama_type = 'EQUIRECTANGULAR'
