@@ -50,6 +50,9 @@ def test_many_queries_on_shared_triangles_match_one_by_one():
     floor = np.array([[-50.0, -50.0, -3.0], [50.0, -50.0, -3.0], [0.0, 60.0, -3.0]])
     tris = small + [floor]
     reach = TriangleReach(_geo(tris))
+    # triangles_within(c, r, _geo([t])) is TriangleReach(_geo([t])).within(c, r): each alone,
+    # built once rather than per query (80,000 builds had cost 13 s CPU, now 0.8 s)
+    alone = [TriangleReach(_geo([t])) for t in tris]
     for _ in range(200):
         c, r = rng.uniform(-6, 6, size=3), rng.uniform(0.01, 1.0)
-        assert reach.within(c, r) == any(triangles_within(c, r, _geo([t])) for t in tris)
+        assert reach.within(c, r) == any(t.within(c, r) for t in alone)
