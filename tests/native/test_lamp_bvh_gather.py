@@ -75,6 +75,49 @@ def test_first_and_last_bit_of_the_candidate_word():
     np.testing.assert_array_equal(L.view(np.uint32), ref.view(np.uint32))
 
 
+@pytest.mark.parametrize('where', ['first', 'between', 'last', 'everywhere'])
+@pytest.mark.parametrize('bsdf', [False, True])
+def test_lamps_at_infinity_add_in_list_order_among_finite_ones(where, bsdf):
+    """A list mixing finite lamps with suns and the background: lamp_gather adds the finite ones
+    through their boxes ray by ray and those at infinity run by run over a block of rays (in
+    lanes), and each ray must still add its lamps in list order. The rays miss (t_surf = inf)
+    and meet finite lamps on the way, so most add both kinds; the same lamps added with those
+    at infinity last give other bits on some of them, which this test must tell apart."""
+    rng = np.random.default_rng({'first': 1, 'between': 2, 'last': 3, 'everywhere': 4}[where] * 2 + bsdf)
+    lamps = many_lamps(rng, 80, spread=2.0)
+    rec = lamp_records(lamps)
+    kinds = rec[:, 0].astype(int)
+    finite = [j for j, lamp in enumerate(lamps) if hasattr(lamp, 'center') and not lamp.delta]
+    suns = [j for j in np.flatnonzero(kinds == dacrt.lamps.KINDS['SUN']) if rec[j, 1] != 0]
+    bg = len(lamps) - 1
+    few = list(rng.choice(finite, 6, replace=False))
+    listed = {'first': [bg, suns[0]] + few, 'between': few[:3] + [bg] + few[3:] + [suns[0]],
+              'last': few + [suns[0], bg], 'everywhere': [bg] + few[:2] + [suns[0], bg] + few[2:4] + [suns[1]]
+              + few[4:] + [bg]}[where]
+    listed = np.array(listed, np.int32)
+    n, N = 64 * 41 + 23, 6000                   # (a short last block and lane group too)
+    O, D, _, _ = rays_at_lamps(rng, [lamps[j] for j in few], n, far=0.3)
+    sun_dir = rec[suns[0], 5:8]
+    aim = rng.random(n) < 0.2                   # some into the first sun's disk
+    D[:, aim] = sun_dir[:, None] + rng.normal(size=(3, aim.sum())) * 0.02
+    t_surf = np.full(n, np.inf, F32)
+    miss = np.ones(n, bool)
+    miss[rng.random(n) < 0.1] = False           # (a few hit something far away)
+    t_surf[~miss] = 1e3
+    pid, kw, L0 = _gather_inputs(rng, bsdf, n, N, len(lamps))
+    L = L0.copy()
+    dacrt.lamps.lamp_gather(rec, listed, O, D, t_surf, miss, pid, L, **kw)
+    ref = brute_force(rec, listed, O, D, t_surf, miss, pid, L0, **kw)
+    np.testing.assert_array_equal(L.view(np.uint32), ref.view(np.uint32))
+    at_infinity = np.isin(listed, suns + [bg])
+    late = brute_force(rec, np.concatenate([listed[~at_infinity], listed[at_infinity]]), O, D, t_surf, miss, pid,
+                       L0, **kw)
+    met = (brute_force(rec, listed[~at_infinity], O, D, t_surf, miss, pid, L0, **kw) != L0).any(axis=0)[pid]
+    assert (met & miss).sum() > n // 10, 'too few rays add both kinds of lamp'
+    if where != 'last':
+        assert (late != ref).any(), 'the order of the additions changes no bit: the test cannot tell it'
+
+
 HIT = np.dtype([('t', F32), ('prim', np.int32), ('u', F32), ('v', F32)])   # the tracer's hit record
 
 
