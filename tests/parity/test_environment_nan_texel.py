@@ -24,7 +24,7 @@ H, W, I, J = 8, 16, 5, 3          # the map and its NaN texel's row (from the bo
 def _scene(seen):
     import bpy
     from mathutils import Vector
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     px = np.full((H, W, 4), 0.5, np.float32)
     px[..., 3] = 1.0

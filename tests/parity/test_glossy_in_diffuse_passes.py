@@ -17,7 +17,7 @@ _SAID = "the glossy layers and BSDFs rendered as diffuse here"
 
 
 def _plane(surface, diffuse_color=True):
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x, sc.render.resolution_y = 8, 6
     sc.cycles.samples = sc.dacrt.samples = 4
