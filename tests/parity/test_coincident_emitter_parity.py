@@ -6,10 +6,7 @@ the copies as one surface; Cycles' bounce ray leaving one copy meets the other a
 gathers its emission again, so Cycles renders them brighter (64x48, K = 1, Cycles 512 spp:
 Combined 0.3515 against 0.2158, Diffuse Direct 0.1537 against 0.0128), where the render had
 said "Cycles renders coincident faces darker" (true of copies that only emit, kept for them)."""
-import math
-
 import bpy
-import numpy as np
 import pytest
 from mathutils import Matrix, Vector
 

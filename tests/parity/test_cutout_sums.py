@@ -15,7 +15,6 @@ from tests.addon import scenes
 
 from . import rendering
 from .test_procedural_alpha import _cells, _checker, _render
-from .test_procedural_emission import _settings
 
 pytestmark = pytest.mark.usefixtures('parity_addon')
 

@@ -8,7 +8,6 @@ the warning now names the node and output."""
 import math
 
 import bpy
-import numpy as np
 import pytest
 
 from tests.addon import scenes
