@@ -589,7 +589,10 @@ def _peaked(pixels, part=1e-3, share=0.25):
         return False
     h = pixels.shape[0]
     rows = np.sin((np.arange(h) + 0.5) * np.pi / h)           # each row's solid angle per texel
-    power = (np.maximum(pixels[..., :3].astype(np.float64), 0.0).mean(-1) * rows[:, None]).ravel()
+    rgb = pixels[..., :3].astype(np.float64)
+    # a NaN or infinite channel reads 0 in every lookup (as in Cycles): no light of its own
+    rgb = np.where(np.isfinite(rgb), np.maximum(rgb, 0.0), 0.0)
+    power = (rgb.mean(-1) * rows[:, None]).ravel()
     area = np.broadcast_to(rows[:, None], pixels.shape[:2]).ravel()
     total = power.sum()
     if not (total > 0.0 and np.isfinite(total)):

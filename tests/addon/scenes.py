@@ -363,11 +363,11 @@ def world_tree(scene=None):
     return w, nt, nt.nodes.new('ShaderNodeOutputWorld')
 
 
-def sky_over_floor(sky_type=None, world_cycles=(), **dacrt):
+def sky_over_floor(sky_type=None, world_cycles=(), sky=(), **dacrt):
     """Render (8 x 6, 1 sample) a camera looking down at a white 20 m floor under a new world: a
-    Background of a Sky Texture of sky_type (None: the Background's uniform colour), the
-    world's Cycles settings from world_cycles ((name, value) pairs) and the scene's DACRT ones
-    from dacrt."""
+    Background of a Sky Texture of sky_type (None: the Background's uniform colour) with the
+    settings sky ((name, value) pairs), the world's Cycles settings from world_cycles and the
+    scene's DACRT ones from dacrt."""
     camera(location=(0, -6, 3), rotation=(math.radians(65), 0, 0))
     plane("Floor", size=20, materials=(diffuse("White", (0.8, 0.8, 0.8)),))
     w, nt, out = world_tree()
@@ -376,6 +376,8 @@ def sky_over_floor(sky_type=None, world_cycles=(), **dacrt):
     if sky_type:
         tex = nt.nodes.new('ShaderNodeTexSky')
         tex.sky_type = sky_type
+        for name, value in sky:
+            setattr(tex, name, value)
         nt.links.new(tex.outputs[0], bg.inputs['Color'])
     for name, value in world_cycles:
         setattr(w.cycles, name, value)
