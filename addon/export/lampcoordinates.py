@@ -264,7 +264,8 @@ def _nan_note(nan):
     """The note of a profile's NaN directions (texture_profile): dark there, as Cycles drops them."""
     if not nan.any():
         return []
-    return [f"the texture is NaN toward {nan.any(axis=1).mean():.0%} of directions, which emit nothing there, "
+    return [f"the texture is NaN at {nan.any(axis=1).mean():.0%} of the profile's grid of directions, which emit "
+            "nothing there, "
             "as in Cycles"]
 
 

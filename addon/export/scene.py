@@ -946,13 +946,11 @@ class Exporter:
         """Whether a rendered surface has a closure Cycles treats as glossy, which DACRT renders
         as diffuse (Material.glossy), or Blender's default surface (material 0, a Principled
         with its specular layer). Sheen and a Toon's Diffuse component are diffuse in Cycles."""
-        used = self._used
-        if (used == 0).any():
-            return True
-        return any(self.materials.materials[k].glossy for k in used if 0 < k < len(self.materials.materials))
+        return bool(self._glossy_surfaces())
 
     def _glossy_surfaces(self) -> list:
-        """The names (quoted, as said) of the rendered surfaces _glossy_as_diffuse looks for."""
+        """The names (quoted, as said) of the rendered surfaces with a closure Cycles treats as
+        glossy (_glossy_as_diffuse)."""
         mats = self.materials.materials
         names = ["objects without a material (a Principled BSDF)"] if (self._used == 0).any() else []
         return names + [f"'{mats[k].name}'" for k in dict.fromkeys(self._used.tolist())

@@ -305,9 +305,9 @@ def glossy_in_diffuse_passes(layer, passes, surfaces):
         return ''
     return (f"view layer '{layer}': {', '.join(held)} {'holds' if len(held) == 1 else 'hold'} the glossy layers and BSDFs rendered as diffuse "
             f"here (a Principled's specular layer, metal, coat and glass; Glossy, Metallic and Glass BSDFs) of "
-            f"{', '.join(surfaces)}: Cycles writes those to its Glossy passes, so these differ from Cycles' "
-            f"(a Principled of base (0.6, 0.3, 0.2) and the default specular layer: Diffuse Color 1.1-1.4x "
-            f"Cycles')")
+            f"{', '.join(surfaces)}: Cycles writes those to its Glossy passes (refraction to Transmission), so "
+            f"these differ from Cycles'" + (" (a Principled of base (0.6, 0.3, 0.2) and the default specular "
+                                          "layer: Diffuse Color 1.1-1.4x Cycles')" if 'DiffCol' in passes else ""))
 
 
 def _shared_pass_text(layer, shared, hidden, aov_kinds):

@@ -67,4 +67,3 @@ def build_tree(lamps, triangles, num_lamps: int, enabled: bool = True, tri_objec
                                   None if light_set is None else np.concatenate(light_set),
                                   np.concatenate(radius))
     return tree, np.sort(keys)
-

@@ -18,8 +18,10 @@ namespace dacrt {
 // summed in row order), from texels height x width x channels (channels >= 3: the first three
 // are RGB). Linear maps: each texel's RGB times scale (null: 1; float products, as numpy's
 // pixels x strength) is the radiance. srgb: the RGB is sRGB-encoded and kept so, scale
-// multiplying the decoded lookups (environment.h). Empty string on success, else what is wrong:
-// a texel (after the scale) negative or not finite, a scale negative or not finite, the sizes, a
+// multiplying the decoded lookups (environment.h). A NaN or infinite texel channel is kept as NaN:
+// every lookup blending it in reads 0 in that channel, as Cycles' film drops its NaN blend (its
+// luminance for the importance reads 0). Empty string on success, else what is wrong: a finite
+// texel negative or made infinite by the scale, a scale negative or not finite, the sizes, a
 // to_map that is not orthogonal.
 std::string build_environment_texels(EnvironmentMap& env, const float* texels, size_t channels, uint32_t width,
                                      uint32_t height, const float to_map[9], bool closest, bool srgb = false,
@@ -33,7 +35,7 @@ std::string build_environment_bytes(EnvironmentMap& env, const uint8_t* texels, 
                                     const float* scale = nullptr);
 
 // What a world's map needs to know of texels n x channels (channels >= 3, RGB first): how many
-// texels hold a non-finite RGB value (rendered black), whether a finite RGB value is negative
+// texels hold a non-finite RGB value (black: in a world map, every blend taking it in), whether a finite RGB value is negative
 // (rendered 0), whether any is above 0 (the world lights anything). One threaded pass, no
 // temporaries (numpy's isfinite, < 0 and > 0 over a 4K RGBA map took ~0.2 s CPU).
 struct TexelStats {

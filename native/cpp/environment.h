@@ -40,8 +40,9 @@ struct EnvironmentMap {
     bool srgb = false;                  // texel RGB is sRGB-encoded: decoded after the blend, then x scale
     float scale[3] = {1, 1, 1};         // multiplies an sRGB map's decoded radiance
     std::vector<float> texel;           // height x width x 4, row 0 at the bottom: RGB and luminance
-                                        // (RGB mean; an sRGB map's of the decoded texel x scale) per texel, one 16-byte record, so a corner's
-                                        // colour and luminance share a cache line
+                                        // (RGB mean; an sRGB map's of the decoded texel x scale)
+                                        // per texel, one 16-byte record, so a corner's colour and
+                                        // luminance share a cache line
     std::vector<double> row_cdf;        // height + 1: cumulative row weights / total, [0] = 0, [h] = 1
     uint32_t row_buckets = 1;           // the same guide (below) for row_cdf: R + 1 entries
     std::vector<uint32_t> row_guide;

@@ -228,7 +228,6 @@ def test_planes_holding_more_than_max_group_triangles_are_checked():
     assert 4 < truth.sum() and (got == truth).all(), (np.nonzero(got)[0], np.nonzero(truth)[0])
 
 
-
 @pytest.mark.parametrize('far', [1e3, 1e6])
 def test_a_rug_on_a_floor_is_found_beside_a_far_ground_in_its_plane(far):
     """The 30x30 floor and its rug of test_planes_holding_more_than_max_group_triangles_are_checked
@@ -248,6 +247,7 @@ def test_a_rug_on_a_floor_is_found_beside_a_far_ground_in_its_plane(far):
     got = _found(*_join(near, *ground))
     assert (got[:len(alone)] == alone).all(), f"{int(got[:len(alone)].sum())} found of {int(alone.sum())}"
     assert got[len(alone):].all()
+
 
 def _ring(segments=24, inner=0.99, outer=1.0):
     """A thin flat annulus of quads: a sparse shape, mostly empty inside its bounding square."""

@@ -160,8 +160,10 @@ def environment_map(rgb, to_map=None, interpolation: str = "Linear", srgb: bool 
     k x 1/255 (an 8-bit image's, as the export's floats of them), the orthogonal to_map (3, 3) taking
     world directions to the map's frame (None: identity) and 'Linear' (bilinear) or 'Closest'
     lookup. With srgb, rgb is sRGB-encoded (as Cycles keeps an 8-bit image): lookups blend it,
-    decode the blend and multiply by scale, and the map is sampled by its decoded texels. The
-    tables are built on all threads, the same bits on any number of them.
+    decode the blend and multiply by scale, and the map is sampled by its decoded texels. A NaN
+    or infinite texel channel reads 0 in every lookup blending it in (as Cycles' film drops its
+    NaN blend) and as 0 in the importance. The tables are built on all threads, the same bits on
+    any number of them.
 
     The object offers eval(D (3, n)) -> (radiance (3, n), solid-angle pdf (n,)),
     sample(u1, u2 (n,)) -> (wi (3, n), radiance / pdf (3, n), pdf (n,)) and
