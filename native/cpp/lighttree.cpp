@@ -598,21 +598,27 @@ int32_t LightTree::sample(const float P[3], const float* N, double u, double& pr
     return leaf_pick(at, u, lo, w, prob);
 }
 
-// sample_rows' points, kRows at a time: each one's coordinates and normal, its walk's u, lo and
-// w, and the order the walks are grouped in by stop (ids); the rows a stop's points are copied
-// into for its lanes (padded to 16; the lanes work out |N| and max |P_k| from them), their weighs.
+// sample_rows' points, kRows at a time, kept in walk order: a stop's walks [b, e) hold
+// positions b.. e - 1 of one of two sets of rows (Walks), from which the stop's lanes weigh them
+// in place and pick_rows narrows their lo and w in place; the regroup by target then moves each
+// walk (coordinates, normal, u, lo, w and its point's index) into the other set, where the
+// next stops find their walks side by side. (Kept by index instead, each stop had copied its
+// walks' six coordinates and u, lo, w out to rows and lo, w back: ~35% of walk_rows' perf
+// samples, loads scattered by index.) A child stop writes its regroup into the rows its parent
+// read, within its own range: the parent is done with them.
 struct LightTree::Rows {
     static constexpr size_t kRows = 512, kPad = 16;
+    struct Walks {
+        float rows[6][kRows + kPad];  // P, N (padded to 16 for the lanes; zeros: no normals)
+        double u[kRows], lo[kRows], w[kRows];
+        int32_t id[kRows];            // the point's index from base
+    };
     bool normal;
     const uint64_t* receivers;  // (per point, null: every set)
     size_t base;                // the first point's index in sample_rows' arrays
-    float pt[kRows][6];
-    double u[kRows], lo[kRows], w[kRows];
-    int32_t ids[kRows], tmp[kRows];
+    Walks walks[2];             // a stop at depth d reads walks[d % 2], regroups into the other
     uint8_t pick[kRows];
     double t[4][kRows];  // each target's summed importance
-    double su[kRows], slo[kRows], sw[kRows];  // a stop's walks' u, lo, w by position (pick_rows)
-    float rows[6][kRows + kPad];
     float g[8][kRows + kPad];
     int32_t ok[8][kRows + kPad];
     int32_t fours[2][kRows];  // per walk: lanes 0-3's, 4-7's ok ANDed (-1: in float's range)
@@ -716,20 +722,23 @@ inline int lane_imps(const LightTree::Stop& q, const LightTree::Rows& r, size_t 
     return bad;
 }
 
-// The walks of r.ids[b, e), all at stop node `at`, each on its own to its leaf as sample() walks
-// (the same bits: test_light_tree_lanes). walk_rows hands a stop's walks here when fewer than
-// kRowsFrom reach it: its rows are weighed 16 points at a time per filled lane, so a stop of 1-3
-// points weighed as many lanes as 16 (300- to 3000-light trees, whose deeper stops split a
-// chunk into such batches: tree.sample 449-514 -> 353-365 ns a point with 3000 lights).
-void LightTree::walk_each(const Rows& r, size_t at, size_t b, size_t e, int32_t key[], double prob[]) const {
+// The walks at positions [b, e) of walks[depth % 2], all at stop node `at`, each on its own to
+// its leaf as sample() walks (the same bits: test_light_tree_lanes). walk_rows hands a stop's
+// walks here when fewer than kRowsFrom reach it: its rows are weighed 16 points at a time per
+// filled lane, so a stop of 1-3 points weighed as many lanes as 16 (300- to 3000-light trees,
+// whose deeper stops split a chunk into such batches: tree.sample 449-514 -> 353-365 ns a
+// point with 3000 lights).
+void LightTree::walk_each(const Rows& r, size_t depth, size_t at, size_t b, size_t e, int32_t key[],
+                          double prob[]) const {
+    const Rows::Walks& c = r.walks[depth % 2];
     for (size_t i = b; i < e; ++i) {
-        const size_t id = size_t(r.ids[i]), o = r.base + id;
-        const float* t = r.pt[id];
+        const size_t o = r.base + size_t(c.id[i]);
+        const float P[3] = {c.rows[0][i], c.rows[1][i], c.rows[2][i]}, N[3] = {c.rows[3][i], c.rows[4][i], c.rows[5][i]};
         TreePoint point;
-        tree_point(point, t, r.normal ? t + 3 : nullptr);
+        tree_point(point, P, r.normal ? N : nullptr);
         const uint64_t rec = r.receivers ? r.receivers[o] : kAllSets;
-        const double u = r.u[id];
-        double lo = r.lo[id], w = r.w[id];
+        const double u = c.u[i];
+        double lo = c.lo[i], w = c.w[i];
         size_t s = at;
         while (nodes_[s].child >= 0) {
             double p[4];
@@ -740,22 +749,21 @@ void LightTree::walk_each(const Rows& r, size_t at, size_t b, size_t e, int32_t 
     }
 }
 
-// The walks of r.ids[b, e), all at stop node `at`: their lanes weighed row by row, each walk's
-// step (probs_of, step: sample()'s), then on by target, stop by stop, to their leaves.
-void LightTree::walk_rows(Rows& r, size_t at, size_t b, size_t e, int32_t key[], double prob[]) const {
+// The walks at positions [b, e) of walks[depth % 2], all at stop node `at`: their lanes weighed
+// row by row, each walk's step (probs_of, step: sample()'s), then on by target, stop by stop, to
+// their leaves.
+void LightTree::walk_rows(Rows& r, size_t depth, size_t at, size_t b, size_t e, int32_t key[], double prob[]) const {
     static const LaneRowsFn weigh_rows = lane_rows_fn();
     constexpr size_t kRowsFrom = 4;
     const size_t qi = size_t(stop_of_[at]), m = e - b;
     if (m < kRowsFrom) {
-        walk_each(r, at, b, e, key, prob);
+        walk_each(r, depth, at, b, e, key, prob);
         return;
     }
     const Stop& q = stops_[qi];
-    for (size_t i = 0; i < m; ++i) {
-        const float* t = r.pt[r.ids[b + i]];
-        for (int f = 0; f < 6; ++f) r.rows[f][i] = t[f];
-    }
-    const TreeRows rows{{r.rows[0], r.rows[1], r.rows[2]}, {r.normal ? r.rows[3] : nullptr, r.rows[4], r.rows[5]}};
+    Rows::Walks& c = r.walks[depth % 2];
+    const TreeRows rows{{c.rows[0] + b, c.rows[1] + b, c.rows[2] + b},
+                        {r.normal ? c.rows[3] + b : nullptr, c.rows[4] + b, c.rows[5] + b}};
     // An empty lane (no node) weighs 0 and repeats lane 0's bounds (build_stops), so its
     // distances are in float's range where lane 0's are: only that decides for its four.
     bool empty_hi = false;
@@ -768,15 +776,16 @@ void LightTree::walk_rows(Rows& r, size_t at, size_t b, size_t e, int32_t key[],
     const uint64_t* sets = stop_sets_.empty() ? nullptr : stop_sets_.data() + 12 * qi;
     if (sets && r.receivers) {  // light linking: a walk at a time, its lanes masked by its sets
         for (size_t i = 0; i < m; ++i) {
-            const int32_t id = r.ids[b + i];
+            const size_t at_i = b + i;
             double imp[8];
-            const float* P = r.pt[id];
+            const float P[3] = {c.rows[0][at_i], c.rows[1][at_i], c.rows[2][at_i]},
+                        N[3] = {c.rows[3][at_i], c.rows[4][at_i], c.rows[5][at_i]};
             const int bad = lane_imps(q, r, i, empty_hi, imp);
-            if (bad) exact_halves(nodes_.data(), q, bad, P, r.normal ? P + 3 : nullptr, imp);
-            const uint64_t rec = r.receivers[r.base + size_t(id)];
+            if (bad) exact_halves(nodes_.data(), q, bad, P, r.normal ? N : nullptr, imp);
+            const uint64_t rec = r.receivers[r.base + size_t(c.id[at_i])];
             double p[4];
             probs_of(nodes_.data(), q, rec == kAllSets ? nullptr : sets, rec, imp, p);
-            r.pick[i] = uint8_t(pick_of(p, r.u[id], r.lo[id], r.w[id]));
+            r.pick[i] = uint8_t(pick_of(p, c.u[at_i], c.lo[at_i], c.w[at_i]));
         }
     } else {
         // probs_of's steps pass by pass over the points (each target's summed importance, the
@@ -784,16 +793,16 @@ void LightTree::walk_rows(Rows& r, size_t at, size_t b, size_t e, int32_t key[],
         // the pick), so that the walks overlap: the same operations per walk
         for (int j = 0; j < 4; ++j) {
             double* t = r.t[j];
-            const int a = 2 * j, c = 2 * j + 1;
+            const int a = 2 * j, cl = 2 * j + 1;
             if (q.target[j] < 0) {
                 std::fill(t, t + m, 0.0);
                 continue;
             }
             const double ea = q.energy[a];
             for (size_t i = 0; i < m; ++i) t[i] = ea * double(r.g[a][i]);
-            if (q.node[c] < 0) continue;  // (+ an empty lane's 0.0: t >= +0 or NaN, the same)
-            const double ec = q.energy[c];
-            for (size_t i = 0; i < m; ++i) t[i] += ec * double(r.g[c][i]);
+            if (q.node[cl] < 0) continue;  // (+ an empty lane's 0.0: t >= +0 or NaN, the same)
+            const double ec = q.energy[cl];
+            for (size_t i = 0; i < m; ++i) t[i] += ec * double(r.g[cl][i]);
         }
         // which fours left float's range at each walk: the filled lanes' ok rows ANDed per four
         // in vectors (an empty lane among 4-7 by lane 0's), rather than eight tests per walk
@@ -813,56 +822,53 @@ void LightTree::walk_rows(Rows& r, size_t at, size_t b, size_t e, int32_t key[],
             const int bad = (fours[0][i] ? 0 : 1) | (fours[1][i] ? 0 : 2);
             double imp[8];
             lane_imps(q, r, i, empty_hi, imp);
-            const float* P = r.pt[r.ids[b + i]];
-            exact_halves(nodes_.data(), q, bad, P, r.normal ? P + 3 : nullptr, imp);
+            const size_t at_i = b + i;
+            const float P[3] = {c.rows[0][at_i], c.rows[1][at_i], c.rows[2][at_i]},
+                        N[3] = {c.rows[3][at_i], c.rows[4][at_i], c.rows[5][at_i]};
+            exact_halves(nodes_.data(), q, bad, P, r.normal ? N : nullptr, imp);
             for (int j = 0; j < 4; ++j) r.t[j][i] = q.target[j] >= 0 ? imp[2 * j] + imp[2 * j + 1] : 0.0;
         }
         double pe[4];  // where all importances are 0 (or their sum is not finite): by energy
         {
-            double e = 0.0;
-            for (int j = 0; j < 4; ++j) e += q.target[j] >= 0 ? nodes_[size_t(q.target[j])].energy : 0.0;
-            const double inv = 1.0 / e;
+            double en = 0.0;
+            for (int j = 0; j < 4; ++j) en += q.target[j] >= 0 ? nodes_[size_t(q.target[j])].energy : 0.0;
+            const double inv = 1.0 / en;
             for (int j = 0; j < 4; ++j) pe[j] = q.target[j] >= 0 ? nodes_[size_t(q.target[j])].energy * inv : 0.0;
         }
-        for (size_t i = 0; i < m; ++i) {
-            const int32_t id = r.ids[b + i];
-            r.su[i] = r.u[id], r.slo[i] = r.lo[id], r.sw[i] = r.w[id];
-        }
         static const PickRowsFn pick = lane_copy<PickRowsFn>(portable_pick_rows, avx2_pick_rows, avx512_pick_rows);
-        pick(r.t, pe, r.su, r.slo, r.sw, m, r.pick);
-        for (size_t i = 0; i < m; ++i) {
-            const int32_t id = r.ids[b + i];
-            r.lo[id] = r.slo[i], r.w[id] = r.sw[i];
-        }
+        pick(r.t, pe, c.u + b, c.lo + b, c.w + b, m, r.pick);
     }
-    // the walks regrouped by target: counts and cursors kept in registers and chosen by masks
-    // (a histogram in memory, ++count[pick] and tmp[fill[pick]++], chained each walk to the
-    // last one's store: ~11% of walk_rows' perf samples)
+    // the walks regrouped by target into the other rows: counts and cursors kept in registers
+    // and chosen by masks (a histogram in memory, ++count[pick] and tmp[fill[pick]++], chained
+    // each walk to the last one's store: ~11% of walk_rows' perf samples)
     size_t count[4] = {};
     for (size_t i = 0; i < m; ++i)
         for (int j = 0; j < 4; ++j) count[j] += r.pick[i] == j;
-    size_t start[5] = {0};
+    size_t start[5] = {b};
     for (int j = 0; j < 4; ++j) start[j + 1] = start[j] + count[j];
+    Rows::Walks& nx = r.walks[(depth + 1) % 2];
     {
         size_t f0 = start[0], f1 = start[1], f2 = start[2], f3 = start[3];
         for (size_t i = 0; i < m; ++i) {
-            const size_t k = r.pick[i];
+            const size_t k = r.pick[i], from = b + i;
             const size_t m0 = -size_t(k == 0), m1 = -size_t(k == 1), m2 = -size_t(k == 2), m3 = -size_t(k == 3);
-            r.tmp[(f0 & m0) | (f1 & m1) | (f2 & m2) | (f3 & m3)] = r.ids[b + i];
+            const size_t to = (f0 & m0) | (f1 & m1) | (f2 & m2) | (f3 & m3);
+            for (int f = 0; f < 6; ++f) nx.rows[f][to] = c.rows[f][from];
+            nx.u[to] = c.u[from], nx.lo[to] = c.lo[from], nx.w[to] = c.w[from];
+            nx.id[to] = c.id[from];
             f0 -= m0, f1 -= m1, f2 -= m2, f3 -= m3;
         }
     }
-    std::copy(r.tmp, r.tmp + m, r.ids + b);
     for (int j = 0; j < 4; ++j) {
         if (!count[j]) continue;
-        const size_t t = size_t(q.target[j]), jb = b + start[j], je = b + start[j + 1];
+        const size_t t = size_t(q.target[j]), jb = start[j], je = start[j + 1];
         if (nodes_[t].child >= 0) {
-            walk_rows(r, t, jb, je, key, prob);
+            walk_rows(r, depth + 1, t, jb, je, key, prob);
             continue;
         }
         for (size_t i = jb; i < je; ++i) {
-            const size_t id = size_t(r.ids[i]), o = r.base + id;
-            key[o] = leaf_pick(t, r.u[id], r.lo[id], r.w[id], prob[o]);
+            const size_t o = r.base + size_t(nx.id[i]);
+            key[o] = leaf_pick(t, nx.u[i], nx.lo[i], nx.w[i], prob[o]);
         }
     }
 }
@@ -872,21 +878,23 @@ void LightTree::sample_rows(size_t count, const float* P, const float* N, size_t
     std::unique_ptr<Rows> r(new Rows);
     r->normal = N != nullptr;
     r->receivers = receivers;
+    Rows::Walks& c = r->walks[0];
     for (size_t b = 0; b < count; b += Rows::kRows) {
         const size_t m = std::min(Rows::kRows, count - b);
         r->base = b;
+        for (size_t a = 0; a < 3; ++a)
+            for (size_t i = 0; i < m; ++i)
+                c.rows[a][i] = P[a * stride + b + i], c.rows[3 + a][i] = N ? N[a * stride + b + i] : 0.0f;
         for (size_t i = 0; i < m; ++i) {
-            float* o = r->pt[i];
-            for (size_t a = 0; a < 3; ++a) o[a] = P[a * stride + b + i], o[3 + a] = N ? N[a * stride + b + i] : 0.0f;
-            r->u[i] = u[b + i] >= 0.0 ? u[b + i] : 0.0;  // (NaN too)
-            r->lo[i] = 0.0, r->w[i] = 1.0;
-            r->ids[i] = int32_t(i);
+            c.u[i] = u[b + i] >= 0.0 ? u[b + i] : 0.0;  // (NaN too)
+            c.lo[i] = 0.0, c.w[i] = 1.0;
+            c.id[i] = int32_t(i);
         }
         if (nodes_[0].child >= 0) {
-            walk_rows(*r, 0, 0, m, key, prob);
+            walk_rows(*r, 0, 0, 0, m, key, prob);
             continue;
         }
-        for (size_t i = 0; i < m; ++i) key[b + i] = leaf_pick(0, r->u[i], r->lo[i], r->w[i], prob[b + i]);
+        for (size_t i = 0; i < m; ++i) key[b + i] = leaf_pick(0, c.u[i], c.lo[i], c.w[i], prob[b + i]);
     }
 }
 

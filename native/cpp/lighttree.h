@@ -134,8 +134,8 @@ public:
 
 private:
     void build_stops();
-    void walk_rows(Rows& r, size_t at, size_t b, size_t e, int32_t key[], double prob[]) const;
-    void walk_each(const Rows& r, size_t at, size_t b, size_t e, int32_t key[], double prob[]) const;
+    void walk_rows(Rows& r, size_t depth, size_t at, size_t b, size_t e, int32_t key[], double prob[]) const;
+    void walk_each(const Rows& r, size_t depth, size_t at, size_t b, size_t e, int32_t key[], double prob[]) const;
     void probs_at(size_t at, const TreePoint& point, uint64_t receivers, double p[4]) const;
     size_t step(size_t at, const double p[4], double u, double& lo, double& w) const;
     static int pick_of(const double p[4], double u, double& lo, double& w);  // step's target index
