@@ -46,4 +46,9 @@ struct TreeRows {
 using LaneRowsFn = void (*)(const LightTree::Stop& q, int k, const TreeRows& rows, size_t m, float* g, int32_t* ok);
 LaneRowsFn lane_rows_fn();
 
+namespace avx512 {  // the AVX-512 copies (treelanes_avx512.cpp), for lane_copy
+int tree_weigh(const LightTree::Stop& q, const TreePoint& at, double imp[8]);
+void tree_rows(const LightTree::Stop& q, int k, const TreeRows& rows, size_t m, float* g, int32_t* ok);
+}  // namespace avx512
+
 }  // namespace dacrt
