@@ -224,8 +224,11 @@ class Exporter:
         # render (its viewport never blurs) with Render and the layer's Motion Blur on and a
         # shutter open (Cycles blurs nothing of a layer whose own switch is off)
         r = self.scene.render
-        self._blur = MotionCheck() if (view_camera is None and r.use_motion_blur and r.motion_blur_shutter > 0
-                                       and getattr(self.view_layer, 'use_motion_blur', True)) else None
+        blurs = view_camera is None and r.use_motion_blur and getattr(self.view_layer, 'use_motion_blur', True)
+        self._blur = MotionCheck() if blurs and r.motion_blur_shutter > 0 else None
+        # (a script's or driver's NaN Shutter: Cycles then blurs nothing, as a closed shutter
+        # (measured: its image is the shutter 0 one), which DACRT's image is; had been unnamed)
+        self._shutter_nan = blurs and r.motion_blur_shutter != r.motion_blur_shutter
         self._blurred = {}                  # names of rendered objects that may blur (ordered)
         self.world = effective_world(self.scene, self.layer_eval)
         # whether any shader reads Object Info: else no instance's values are gathered
@@ -1015,6 +1018,9 @@ class Exporter:
                                        self._blur.camera_moves(self.camera or self.scene.camera))
             if said:
                 self.messages.append(('WARNING', said))
+        if self._shutter_nan:
+            self.messages.append(('WARNING', "motion blur: the render's Shutter is NaN (a script's or driver's), "
+                                             "so nothing is blurred, as in Cycles (set a Shutter to blur)"))
         space = getattr(getattr(bpy.data, 'colorspace', None), 'working_space', 'Linear Rec.709')
         if space and space != 'Linear Rec.709':
             # Blender 5.0's file working space: Cycles renders in its primaries; the export's

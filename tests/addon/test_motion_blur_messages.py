@@ -172,3 +172,17 @@ def test_viewport_is_not_warned(scene):
     assert not [m for _, m in data.messages if "motion blur" in m]
     # the final render's export of the same frame says it
     assert [m for _, m in export.export_scene(dg).messages if "motion blur" in m]
+
+
+def test_nan_shutter_is_named(scene, said):
+    """A script's NaN Shutter: Cycles 5.0.1 blurs nothing (its image is the shutter 0 one, measured
+    on a moving cube), as DACRT draws it: the NaN is named, and no blur is said to be missing. The
+    check `shutter > 0` had been False for NaN, and nothing was said."""
+    cube = _scene(scene)
+    scenes.keyed(cube, 'location', {1: (-1, 0, 0), 10: (1, 0, 0)})
+    scene.frame_set(5)
+    scene.render.motion_blur_shutter = float('nan')
+    assert scene.render.motion_blur_shutter != scene.render.motion_blur_shutter     # (kept NaN by RNA)
+    text = _blur_said(said)
+    assert len(text) == 1 and "Shutter is NaN" in text[0] and "nothing is blurred" in text[0], text
+    assert "not rendered" not in text[0]
