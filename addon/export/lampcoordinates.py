@@ -265,8 +265,7 @@ def _nan_note(nan):
     if not nan.any():
         return []
     return [f"the texture is NaN at {nan.any(axis=1).mean():.0%} of the profile's grid of directions, which emit "
-            "nothing there, "
-            "as in Cycles"]
+            "nothing there, as in Cycles"]
 
 
 def _spot_uv(d, spot_size):

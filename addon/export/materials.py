@@ -35,6 +35,7 @@ from .cutouts import Cutouts
 from .emission import Emission
 from .groupinputs import grouped_inputs
 from .imagetextures import TEXTURE_EXTENSIONS, ImageTextures
+from .nanmessages import nan_found
 from .meshes import STANDARD_OF, per_primitive
 from .objectinfo import OBJECT_INFO
 from . import pointnormals, rayvariants
@@ -452,8 +453,6 @@ class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBak
             # (a colour or float node computes with it as Cycles does: a Color Ramp's Factor
             # gives its last stop, a colour computed as NaN is black; a shader's own input
             # reads 0; a procedural texture computes with it as Cycles' kernels do)
-            computed = {n.type for n in ntree.nodes if nodeeval.node_inputs(n) is not None}
-            shader = {n.type for n in ntree.nodes} - computed - PROCEDURAL_TYPES
             # only nodes Cycles compiles (the active output and what reaches it after constant
             # folding): a NaN in a node left unlinked, or on an EEVEE-only output, is read by nothing
             used = self._used_outputs
@@ -475,17 +474,18 @@ class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBak
             apart = [b for bad, _ in unlike for b in bad]
             through = _nan_inputs_named(ntree, NAN_COMPUTED, rendered) + _grouped_named(nans, NAN_COMPUTED)
             # (a shader's NaN colour or vector too: Cycles 5.0.1 reads the NaN channel as 0 in a
-            # Diffuse's, Principled's or Glossy's Color, as DACRT does, where it had gone unnamed)
-            in_shaders = [g.label for g in grouped if np.isnan(g.value).any()
-                          and nodeeval.node_inputs(g.node) is None and g.node.type not in PROCEDURAL_TYPES]
-            # (and one into a node computed, as its float inputs are: a Mix's NaN A had gone unnamed)
-            in_computed = [g.label for g in grouped if np.isnan(g.value).any() and nodeeval.node_inputs(g.node) is not None]
-            for bad, said in (([b for b in nan_inputs(ntree, shader, rendered, colors=True) + in_shaders
-                                if b not in apart and b not in through],
+            # Diffuse's, Principled's or Glossy's Color, as DACRT does, where it had gone unnamed;
+            # and one into a node computed, as its float inputs are: a Mix's NaN A had gone
+            # unnamed). Which node computes is asked of each node, as for a world's or a light's
+            # (by node type here, a Mix of floats had made the tree's non-uniform Mix computed)
+            found = nan_found(ntree, used, grouped)
+            said_apart = set(apart) | set(through)
+            for bad, said in (([b for node, b, _, c in found
+                                if not c and node.type not in PROCEDURAL_TYPES and b not in said_apart],
                                "NaN read as 0 (as Cycles clamps it) for {}"),
                               *((bad, f"NaN read as 0 for {{}}, where Cycles renders it {what}, not as 0")
                                 for bad, what in unlike),
-                              (nan_inputs(ntree, computed, rendered, colors=True) + in_computed + through +
+                              ([b for _, b, _, c in found if c] + through +
                                [b for b in textures if b not in differs],
                                "NaN computed through the node as Cycles computes it for {}"),
                               (differs, "NaN for {}: the texture computes with it, not as Cycles' does")):
