@@ -8,8 +8,10 @@ hung), and a one-thread call raised MemoryError and left the kept top with the l
 so the frame's next call hung.
 
 Allocation failure is made deterministic by a malloc shim loaded with LD_PRELOAD in a
-subprocess: once armed, it lets the next pool block through (the new kept top's first) and
-fails every later allocation of a pool block's size, which only the pool asks for."""
+subprocess: it lets the first pool block through (the new kept top's first) and fails every
+later allocation of a pool block's size, but only while armed, which it is around the traced
+calls alone: the rays and references are made disarmed, so that an unrelated allocation of the
+same size (numpy's, the interpreter's) cannot fail."""
 
 import json
 import os
@@ -21,11 +23,14 @@ SHIM = r"""
 #include <stddef.h>
 extern void *__libc_malloc(size_t);
 static size_t fail_size;
-static long allow = -1, failed;
-void shim_arm(size_t size, long allowed) { fail_size = size; __atomic_store_n(&allow, allowed, __ATOMIC_SEQ_CST); }
+static int armed;
+static long allow, failed;
+/* armed: fail allocations of size, but for the first `allowed` of them (counted while armed) */
+void shim_set(size_t size, long allowed) { fail_size = size; allow = allowed; }
+void shim_arm(int on) { __atomic_store_n(&armed, on, __ATOMIC_SEQ_CST); }
 long shim_failed(void) { return __atomic_load_n(&failed, __ATOMIC_SEQ_CST); }
 void *malloc(size_t n) {
-    if (n == fail_size && __atomic_load_n(&allow, __ATOMIC_SEQ_CST) >= 0) {
+    if (n == fail_size && __atomic_load_n(&armed, __ATOMIC_SEQ_CST)) {
         if (__atomic_sub_fetch(&allow, 1, __ATOMIC_SEQ_CST) < 0) {
             __atomic_add_fetch(&failed, 1, __ATOMIC_SEQ_CST);
             return NULL;
@@ -54,11 +59,18 @@ SCRIPT = textwrap.dedent("""
     ref = [(dacrt.Scene(v, t).intersect(rays(n, s), threads=1), dacrt.Scene(v, t).occluded(rays(n, s), threads=1))
            for n, s, _ in batches]
     kept = dacrt.Scene(v, t, keep_top=True)
-    shim.shim_arm(ctypes.c_size_t(int(sys.argv[2])), ctypes.c_long(1))
+    shim.shim_set(ctypes.c_size_t(int(sys.argv[2])), ctypes.c_long(1))
+    def traced(call, r, threads):     # armed around the traced call only
+        shim.shim_arm(1)
+        try:
+            return call(r, threads=threads)
+        finally:
+            shim.shim_arm(0)
     same = []
     for (n, s, threads), (h0, o0) in zip(batches, ref):
-        h = kept.intersect(rays(n, s), threads=threads)
-        o = kept.occluded(rays(n, s), threads=threads)
+        r, r2 = rays(n, s), rays(n, s)      # (each call reorders its rays in place)
+        h = traced(kept.intersect, r, threads)
+        o = traced(kept.occluded, r2, threads)
         same.append(bool(np.array_equal(h.view(np.uint32), h0.view(np.uint32)) and np.array_equal(o, o0)))
     shim.shim_failed.restype = ctypes.c_long
     print(json.dumps({"same": same, "failed": shim.shim_failed()}))
