@@ -26,6 +26,7 @@ from .images import MISSING_IMAGE, WHOLE, encoded_environment, image_pixels
 from .materials import channel_line
 from .shadersockets import mix_factor, value_emission
 from .sky import sky_environment
+from . import worldmix
 
 
 LINEAR_INTERPOLATIONS = ('Cubic', 'Smart')     # of environment maps: blended linearly (reported)
@@ -202,6 +203,8 @@ def _world_surface(socket, weight, color, reasons, depth, rays=None, by_ray=(), 
         else:
             if t == 'MIX_SHADER' and not constant_value(node.inputs['Fac'])[1]:
                 found = _procedural_mix(node, weight, reasons, view)
+                if found is None:
+                    found = _factor_mix(node, weight, color, reasons, depth, rays, by_ray, frame, reading, view)
                 if found is not None:
                     return found
             fac = mix_factor(node, reasons, "world Mix Shader", surface=False) if t == 'MIX_SHADER' else 0.5
@@ -211,7 +214,10 @@ def _world_surface(socket, weight, color, reasons, depth, rays=None, by_ray=(), 
                                              frame, reading, view)
                               for i, w in enumerate(weights))
         if ea is not None and eb is not None:
-            reasons.append("two environment textures in the world; the second ignored")
+            # (the second had been ignored, said)
+            env = worldmix.blended_map([(ua, ea), (ub, eb)], _equirect_directions, PROCEDURAL_WIDTH)
+            reasons.append(f"two environment maps in the world summed into a {_map_said(env)}")
+            return none, env
         return ua + ub, ea if ea is not None else eb
     s, s_ok = constant_value(node.inputs['Strength'])
     found = None if s_ok else _procedural_strength(node, weight, reasons, view)
@@ -328,6 +334,44 @@ def _procedural_strength(node, weight, reasons, view=None):
     return _baked(sockets, tint, f"world {node.bl_label} Strength", reasons, view=view)
 
 
+def _factor_mix(node, weight, color, reasons, depth, rays, by_ray, frame, reading, view):
+    """(zero uniform radiance, Environment) of a world Mix Shader whose factor is computed from
+    procedural textures of the view direction (as _procedural_mix) between shaders that are not
+    both Backgrounds of such colours (an Environment or Sky Texture, a Light Path mix, another
+    Mix or Add): each side exported as the world is (_world_surface, for the same rays), the two
+    blended per direction into one map, (1 - f) A + f B (worldmix.blended_map); None where the
+    factor reads anything else. Its factor had stood at its own value 0.5, said (fuzz 200, 208,
+    215, 221, 223, 227, 241, 246, 250: 0.71-1.31x Cycles per channel)."""
+    from . import procedurals
+    notes = []
+    found = procedurals.compile_socket(node.inputs['Fac'], False, notes, view=True)
+    if found is None:
+        return None
+    fn, needs, src = found
+    coordinates = _world_coordinates(needs, view, reasons)
+    if coordinates is None:
+        return None
+    sides = [_world_surface(node.inputs[i], weight, color, reasons, depth + 1, rays, by_ray, frame, reading, view)
+             for i in (1, 2)]
+    reasons.extend(notes)
+    if all(env is None for _, env in sides) and np.array_equal(sides[0][0], sides[1][0]):
+        return sides[0]         # ((1 - f) A + f A: the factor changes nothing)
+
+    def factor(d):
+        f = np.asarray(fn(coordinates(d)), np.float64)
+        return np.clip(np.nan_to_num(f, nan=0.0), 0.0, 1.0)
+    env = worldmix.blended_map(sides, _equirect_directions, PROCEDURAL_WIDTH, factor)
+    source = str(src) if src else _feeding_name(node.inputs['Fac'])
+    reasons.append(f"world Mix Shader factor from {source} baked into a {_map_said(env)}")
+    return np.zeros(3, np.float32), env
+
+
+def _map_said(env):
+    """'W x H map, blended ...': how a world blended into one map of its directions is said."""
+    h, w = env.pixels.shape[:2]
+    return f"{w} x {h} map, blended between its texels (Cycles evaluates it per ray)"
+
+
 def _procedural_mix(node, weight, reasons, view=None):
     """(uniform radiance, Environment) of a world Mix Shader whose factor is computed from
     procedural textures of the view direction, between two Backgrounds or Emissions (or
@@ -377,31 +421,12 @@ def _baked(sockets, strength, what, reasons, sides=None, view=None):
         side_values.append(value)
         side_chains.extend(found)
     needs = set().union(*(n for _, n, _ in chains + side_chains))
-    frames = {n for n in needs if isinstance(n, tuple) and n[0] == procedurals.OBJECT_OF}
-    if not (needs - frames) <= _WORLD_COORDINATES or len(frames) > 1:
+    coordinates = _world_coordinates(needs, view, reasons)
+    if coordinates is None:
         return None
-    model = None
-    if needs & _OF_CAMERA:
-        if view is None:
-            return None
-        try:
-            model = CameraModel(view)
-        except ValueError:
-            return None
     height = PROCEDURAL_WIDTH // 2
     d = np.ascontiguousarray(_equirect_directions().reshape(-1, 3), np.float32)
-    coords = {kind: d for kind in (needs - frames) | {'generated'}}
-    for kind in _AGAINST_VIEW:
-        if kind in coords:
-            coords[kind] = -d
-    if model is not None:
-        coords.update(_camera_coordinates(model, d.astype(np.float64), needs))
-        if pr.WINDOW_COORDINATES in needs and model.kind == 'ORTHO':
-            reasons.append(ORTHO_WINDOW_SAID)
-    for _, _, inverse in frames:    # Texture Coordinate Object of an object: D as a point in its space
-        if inverse is not None:
-            m = np.array(inverse, np.float64).reshape(4, 4)
-            coords['object'] = (d @ m[:3, :3].T + m[:3, 3]).astype(np.float32)
+    coords = coordinates(d)
     img = np.ones((len(d), 3), np.float64)
     for fn, _, _ in chains:
         img = img * np.asarray(fn(coords), np.float64)      # ((n, 1) floats broadcast over RGB)
@@ -424,6 +449,40 @@ def _baked(sockets, strength, what, reasons, sides=None, view=None):
                    "its texels (Cycles evaluates it per ray)")
     env = sd.Environment(img.astype(np.float32), np.asarray(strength, np.float32))
     return np.zeros(3, np.float32), env
+
+
+def _world_coordinates(needs, view, reasons):
+    """fn(d) -> the coordinates `needs` (a compiled chain's) the background reads at unit directions
+    d (n, 3) float32 (_WORLD_COORDINATES, one object's frame), or None where the chain reads
+    anything else, or the camera's frame (Camera, Window) without a render camera."""
+    from . import procedurals
+    frames = {n for n in needs if isinstance(n, tuple) and n[0] == procedurals.OBJECT_OF}
+    if not (needs - frames) <= _WORLD_COORDINATES or len(frames) > 1:
+        return None
+    model = None
+    if needs & _OF_CAMERA:
+        if view is None:
+            return None
+        try:
+            model = CameraModel(view)
+        except ValueError:
+            return None
+        if pr.WINDOW_COORDINATES in needs and model.kind == 'ORTHO':
+            reasons.append(ORTHO_WINDOW_SAID)
+
+    def coordinates(d):
+        coords = {kind: d for kind in (needs - frames) | {'generated'}}
+        for kind in _AGAINST_VIEW:
+            if kind in coords:
+                coords[kind] = -d
+        if model is not None:
+            coords.update(_camera_coordinates(model, d.astype(np.float64), needs))
+        for _, _, inverse in frames:    # Texture Coordinate Object of an object: D as a point in its space
+            if inverse is not None:
+                m = np.array(inverse, np.float64).reshape(4, 4)
+                coords['object'] = (d @ m[:3, :3].T + m[:3, 3]).astype(np.float32)
+        return coords
+    return coordinates
 
 
 def _camera_coordinates(model, d, needs):
