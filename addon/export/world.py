@@ -77,8 +77,17 @@ def export_world(scene, view_layer=None, camera=None, by_ray=None, reading=WHOLE
     by_ray = by_ray if by_ray is not None else []
     if rays is None and camera is not None:
         rays = CAMERA_RAYS if camera else LIGHT_RAYS
-    uniform, env = _world_surface(out.inputs['Surface'], 1.0, color, reasons, 0, rays,
-                                  by_ray, scene.frame_current, reading, view)
+    values = None
+    if rays is not None:
+        # a ray-type output anywhere in the chains (a factor of Is Camera Ray x a Gradient, a
+        # Strength of Is Camera Ray) computes as the rays' value, and each read asks for the world
+        # of its rays (it had stood at its socket's own value, said)
+        values = {o: float(o in rays) for o in RAY_OUTPUTS}
+        by_ray.extend(sorted({link.from_socket.name for link in nodegraph.links_feeding(out.inputs['Surface'])
+                              if link.from_node.type == 'LIGHT_PATH' and link.from_socket.name in RAY_OUTPUTS}))
+    with nodeeval.light_path(values):
+        uniform, env = _world_surface(out.inputs['Surface'], 1.0, color, reasons, 0, rays,
+                                      by_ray, scene.frame_current, reading, view)
     if rays is not None and 'Is Camera Ray' not in rays and 'Is Camera Ray' in by_ray:
         # (camera rays see the other export's world)
         reasons = [r for r in reasons if r != ORTHO_WINDOW_SAID]

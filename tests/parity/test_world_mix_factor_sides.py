@@ -3,12 +3,14 @@ that are not two Backgrounds of constant or procedural colour: a Light Path mix 
 the camera sees one world, the ball is lit by another), a Background of an Environment Texture;
 and an Add Shader of two Environment Textures. Each side is exported as the world is, for the same
 rays, and the two blended per direction into one map (export/world.py _factor_mix,
-export/worldmix.py), against Cycles: an equirectangular camera's image by quarters of rows and
+export/worldmix.py); a factor of Is Camera Ray x the Gradient computes per ray kind (the camera
+sees the mix, the ball is lit by the image alone), against Cycles: an equirectangular camera's image by quarters of rows and
 columns, and a diffuse ball lit by that world.
 
 The factor had stood at its own value 0.5, said ("world Mix Shader factor not computed ... its own
 value 0.5 used"; fuzz seeds 200, 208, 215, 221, 223, 227, 241, 246, 250: 0.71-1.31x Cycles per
-channel), and the second of two added maps had been ignored, said."""
+channel), the Light Path output inside the factor's chain at its socket's own value, and the
+second of two added maps had been ignored, said."""
 
 import numpy as np
 import pytest
@@ -60,13 +62,19 @@ def _scene(case):
     coordinates = nt.nodes.new('ShaderNodeTexCoord')
     nt.links.new(coordinates.outputs['Normal'], tex.inputs['Vector'])
     nt.links.new(tex.outputs['Fac'], mix.inputs['Fac'])
+    if case == 'camera_ray_times_gradient':     # (the camera sees the mix, the ball is lit by the image)
+        times = nt.nodes.new('ShaderNodeMath')
+        times.operation = 'MULTIPLY'
+        nt.links.new(tex.outputs['Fac'], times.inputs[0])
+        nt.links.new(nt.nodes.new('ShaderNodeLightPath').outputs['Is Camera Ray'], times.inputs[1])
+        nt.links.new(times.outputs[0], mix.inputs['Fac'])
     nt.links.new(first.outputs[0], mix.inputs[1])
     nt.links.new(_background(nt, (0.1, 1.0, 0.2), 1.5).outputs[0], mix.inputs[2])
     nt.links.new(mix.outputs[0], out.inputs['Surface'])
     return sc
 
 
-@pytest.mark.parametrize('case', ['light_path', 'image', 'two_images_added'])
+@pytest.mark.parametrize('case', ['light_path', 'image', 'camera_ray_times_gradient', 'two_images_added'])
 def test_world_mix_of_maps_and_light_path_worlds_agrees_with_cycles(case, tmp_path, said):
     sc = _scene(case)
     layer = sc.view_layers[0].name
