@@ -139,11 +139,16 @@ def _specular_mu(node, reasons):
     return albedo, specular.layer_estimate_mu(roughness, ior, level, tint, _multiscatter(node))
 
 
-def _metal(node, reasons):
+def _metal(node, reasons, metallic=None, source=None):
     """(metallic, roughness, tint) of the metal layer when Cycles renders one (Metallic > 0, a
     node-driven one at its own value), else None; whether the dielectric layers (the specular
-    layer over the base, and the transmission) are kept (Metallic < 1)."""
-    (metallic,), m_ok = _values(node, ('Metallic',))
+    layer over the base, and the transmission) are kept (Metallic < 1). metallic: that value
+    instead of the input's, one side of a metallic map (metallicmaps.py), which `source` names."""
+    (own,), m_ok = _values(node, ('Metallic',))
+    if metallic is None:
+        metallic = own
+    else:
+        m_ok = True
     metallic = min(max(metallic, 0.0), 1.0)
     if not m_ok:
         # a metallic map: its own value, as every node-driven input here (dropping the metal
@@ -155,7 +160,7 @@ def _metal(node, reasons):
         if not (r_ok and c_ok):
             reasons.append("Principled metal inputs driven by nodes; their own values used")
         reasons.append(f"Principled metal as diffuse: its albedo averaged over view directions "
-                       f"(Metallic {metallic:g})")
+                       f"({source or f'Metallic {metallic:g}'})")
         return (metallic, roughness, tint), metallic < 1.0
     return None, True
 
@@ -264,11 +269,12 @@ def _top_mu(node, reasons):
     return top[0] * dim_c, top[0] * add_c + top[1]
 
 
-def layer_steps(node, reasons) -> list:
+def layer_steps(node, reasons, metallic=None, source=None) -> list:
     """The steps from a Principled BSDF's base colour to its albedo, in order: [] for a plain
     Lambertian base; a rough diffuse base's RoughDiffuse map; then one step for the layers
-    over it, (dim (3,), add (3,)), or a BaseMap (which includes the rough diffuse) with metal."""
-    metal, dielectric = _metal(node, reasons)
+    over it, (dim (3,), add (3,)), or a BaseMap (which includes the rough diffuse) with metal.
+    metallic (and the source naming it): at that Metallic, not the input's (see _metal)."""
+    metal, dielectric = _metal(node, reasons, metallic, source)
     spec = trans = None
     if dielectric:
         said = []                  # (not said where the glass covers the layer whole)

@@ -13,7 +13,7 @@ from .. import nodegraph
 from ..nodeeval import constant_color, constant_value
 from ..nodegraph import input_socket, linked_link
 from ..texture import ImageTexels, LazyTexels, stored_texels
-from . import pointnormals, procedurals
+from . import metallicmaps, pointnormals, procedurals
 from .closure import Closure, Texture, is_image_alpha
 from .cutouts import MISSING_ALPHA
 from .images import MISSING_IMAGE
@@ -365,12 +365,17 @@ class ShaderClosures:
             # layer's reflection with it. Not said: the image is Cycles' (it had been reported
             # as an approximation)
             c.const = np.where(~(c.const >= 0.0), 0.0, c.const)
-        steps = principled.layer_steps(node, reasons)
-        plain = c.passes is None
-        for step in steps:
-            c = c.mapped(step) if hasattr(step, 'exact') else c.layered(*step)
-        if plain and len(steps) == 1 and isinstance(steps[0], roughdiffuse.RoughDiffuse):
-            c.rough = (steps[0].sigma, np.ones(3))     # a rough base under no layer: Cycles' BSDF
+        metallic = metallicmaps.compiled_metallic(node, self._texture)
+        mixed = None if metallic is None else metallicmaps.metallic_mix(c, node, metallic, reasons)
+        if mixed is not None:       # (a metallic map: the stacks at Metallic 0 and 1 mixed per point)
+            c = mixed
+        else:
+            steps = principled.layer_steps(node, reasons)
+            plain = c.passes is None
+            for step in steps:
+                c = c.mapped(step) if hasattr(step, 'exact') else c.layered(*step)
+            if plain and len(steps) == 1 and isinstance(steps[0], roughdiffuse.RoughDiffuse):
+                c.rough = (steps[0].sigma, np.ones(3))     # a rough base under no layer: Cycles' BSDF
         base, base_ok = constant_color(node.inputs['Base Color'])
         through = principled.transmittance(node, base)
         if through.any():

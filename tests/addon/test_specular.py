@@ -138,21 +138,28 @@ def test_node_driven_coat_of_own_value_zero_is_reported(scene, exported):
     np.testing.assert_allclose(m.base_color, 0.5)
 
 
-def test_node_driven_metallic_is_read_at_its_own_value(scene, exported):
-    """A Metallic a node drives (a metallic map) is read at its own value, as every node-driven
-    input: at 0 the dielectric specular layer stays (dropping it with the metal rendered a map
-    of zeros 18% darker than Cycles); at 1 the base is a metal."""
+def test_node_driven_metallic_is_per_point_or_read_at_its_own_value(scene, exported):
+    """A Metallic a node drives (a metallic map) is weighed per point (export/metallicmaps.py;
+    against Cycles in tests/parity/test_metallic_map.py). Under a Transmission Weight (the
+    glass weighs 1 - Metallic, one transparency per material) it is read at its own value, as
+    every node-driven input, and said: at 0 the dielectric specular layer stays (dropping it with
+    the metal rendered a map of zeros 18% darker than Cycles); at 1 the base is a metal."""
     scenes.camera((0, -10, 0), (np.pi / 2, 0, 0))
-    for name, own in (("Map at 0", 0.0), ("Map at 1", 1.0)):
+    for name, own, glass in (("Map", 0.0, 0.0), ("Map at 0", 0.0, 0.5), ("Map at 1", 1.0, 0.5)):
         mat = scenes.principled(name, (0.05, 0.05, 0.05))
         nt = mat.node_tree
         p = next(n for n in nt.nodes if n.type == 'BSDF_PRINCIPLED')
         p.inputs['Metallic'].default_value = own
         p.inputs['Specular IOR Level'].default_value = 0.5
+        p.inputs['Transmission Weight'].default_value = glass
         nt.links.new(nt.nodes.new('ShaderNodeTexNoise').outputs['Fac'], p.inputs['Metallic'])
         scenes.plane(name, materials=(mat,))
     got = {m.name: m for m in exported().materials}
-    zero, one = got["Map at 0"], got["Map at 1"]
+    mapped, zero, one = got["Map"], got["Map at 0"], got["Map at 1"]
+    assert not [t for t in mapped.approximated.split("; ") if "driven by nodes" in t], mapped.approximated
+    assert "Principled metal as diffuse: its albedo averaged over view directions (Metallic from procedural " \
+           "texture 'Noise Texture' per point)" in mapped.approximated
+    assert "Principled specular layer as diffuse" in mapped.approximated
     assert "Principled Metallic driven by nodes; its own value 0 used" in zero.approximated
     assert "Principled specular layer as diffuse" in zero.approximated
     assert (zero.base_color > 0.05 + 1e-3).all()           # the specular layer adds to the base
