@@ -31,24 +31,39 @@ def _profile_fn(kind: str, width: float):
 
 @lru_cache(maxsize=16)
 def _table(kind: str, width: float) -> np.ndarray:
-    """Symmetric inverse CDF of the profile (float32, read-only), offsets centred on +0.5 (the
-    pixel centre). Cached: it depends on the settings only, and its 64K-point integration
-    was a fifth of a 100K-triangle frame's set-up.
+    """Cycles' inverse-CDF table of the profile, built as Cycles builds it (float32, read-only),
+    offsets centred on +0.5 (the pixel centre). Cached: it depends on the settings only.
 
-    The CDF is integrated in float64 on a fine grid of the half profile (the table is then
-    mirrored, as Cycles' util_cdf_inverted does with make_symmetric), so the only
-    discretisation left is the table's own 1024 entries with linear interpolation.
+    A port of util_cdf_inverted(1024, 0, R, f, make_symmetric=true) (util/math_cdf.{h,cpp}):
+    the half profile's CDF by a left Riemann sum at 1023 points x_i = R i / 1022, then for each
+    of 512 CDF values i / 511 the position y (Cycles' extrapolation in the segment above it),
+    written symmetrically about entry 511 (0.5 exactly), entries 0..1022. As Cycles' own TODO
+    says, an even-sized table cannot be centred: a lookup at u = 0.5 (each pixel's sample 0,
+    which the Depth, Position and index passes keep) reads between entries 511 and 512, half a
+    step right of the centre (0.0031 pixels at Gaussian 10, 0.0005 at Blackman-Harris 1.5), and
+    the last entry is left 0, so the top 1/1023 of u falls back across the pixel. Centred on
+    entry 511.5 instead (a finely integrated symmetric table), sample 0 had gone through the
+    exact centre: the Depth of a grazing floor at Gaussian 10 was 0.1% off Cycles'
+    (tests/parity/test_filter_table.py).
     """
     profile, r = _profile_fn(kind, width)
-    t = np.linspace(0.0, r, 1 << 16)
-    f = np.abs(profile(t))
-    cdf = np.concatenate([[0.0], np.cumsum(0.5 * (f[1:] + f[:-1]) * np.diff(t))])
+    r = np.float32(r)
+    n = TABLE_SIZE - 1                                   # util_cdf_evaluate(resolution - 1)
+    xs = r * np.arange(n, dtype=np.float32) / np.float32(n - 1)
+    cdf = np.zeros(n + 1, np.float32)
+    cdf[1:] = np.cumsum(np.abs(profile(xs.astype(np.float64))).astype(np.float32), dtype=np.float32)
     cdf /= cdf[-1]
-    # Entry i covers the symmetric CDF value i/(N-1) in [0, 1]; the half CDF value is |2x-1|.
-    x = np.arange(TABLE_SIZE) / (TABLE_SIZE - 1)
-    half = np.abs(2.0 * x - 1.0)
-    offset = np.interp(half, cdf, t)
-    table = (0.5 + np.where(x < 0.5, -offset, offset)).astype(np.float32)
+    half = (TABLE_SIZE - 1) // 2
+    x = (np.arange(half + 1, dtype=np.float32) / np.float32(half)).astype(np.float32)
+    index = np.searchsorted(cdf, x, side='right')        # upper_bound
+    inside = index < len(cdf) - 1
+    k = np.where(inside, index, len(cdf) - 1)
+    lo, hi = cdf[np.minimum(k, len(cdf) - 2)], cdf[np.minimum(k + 1, len(cdf) - 1)]
+    t = np.where(inside, (x - cdf[k]) / np.where(hi > lo, hi - lo, np.float32(1)), np.float32(0)).astype(np.float32)
+    y = ((k.astype(np.float32) + t) / np.float32(TABLE_SIZE - 1)) * (np.float32(2) * r)
+    table = np.zeros(TABLE_SIZE, np.float32)             # (entry 1023 stays 0, as in Cycles)
+    table[half:half + half + 1] = np.float32(0.5) * (np.float32(1) + y)
+    table[half - np.arange(half + 1)] = np.float32(0.5) * (np.float32(1) - y)
     table.flags.writeable = False
     return table
 

@@ -45,13 +45,20 @@ def edge_scene(kind, width, samples):
                         sd.Settings(samples=samples, max_bounces=0, filter_type=kind, filter_width=width))
 
 
-def test_table_is_monotone_symmetric_and_centred():
+def test_table_is_cycles_monotone_symmetric_about_entry_511():
+    """As Cycles' util_cdf_inverted builds it: entries 0..1022 monotone and symmetric about
+    entry 511 (the pixel centre, 0.5), spanning the support; entry 1023 left 0. So u = 0.5 (sample
+    0) reads half a step right of the centre, as in Cycles (tests/parity/test_filter_table.py)."""
     for kind, width in [('BOX', 1.0), ('GAUSSIAN', 1.5), ('BLACKMAN_HARRIS', 1.5), ('BLACKMAN_HARRIS', 3.0)]:
         f = PixelFilter(kind, width)
-        assert f.table.shape == (TABLE_SIZE,)
-        assert np.all(np.diff(f.table) >= 0)
-        assert np.allclose(f.table + f.table[::-1], 1.0, atol=1e-5)
-        assert f.table[0] == pytest.approx(0.5 - f.radius, abs=1e-5)
+        t = f.table
+        assert t.shape == (TABLE_SIZE,)
+        assert np.all(np.diff(t[:TABLE_SIZE - 1]) >= 0)
+        i = np.arange(TABLE_SIZE // 2)
+        assert np.allclose(t[511 - i] + t[511 + i], 1.0, atol=1e-5)
+        assert t[511] == pytest.approx(0.5, abs=1e-6) and t[TABLE_SIZE - 1] == 0.0
+        assert t[0] == pytest.approx(0.5 - f.radius, abs=1e-5)
+        assert f.offsets(np.float32([0.5]))[0] == pytest.approx(0.5 * (t[511] + t[512]), abs=1e-7)
 
 
 def test_box_ignores_width():
