@@ -5,8 +5,13 @@ changes when the scene, the settings or Blender change. So the per-seed Cycles i
 in `build/parity-cache/<scene>-<key>.npz`, where the key hashes everything they depend on:
 the source of scenes.py (the builders) and rendering.py (the fair settings and the EXR path),
 the spec's settings and seeds, and the bpy version. Change any of these and the reference is
-rendered again; an unchanged tree reuses it. Delete the folder to force a re-render.
+rendered again; an unchanged tree reuses it. Delete the folder to force a re-render. A lock
+file per scene makes a second pytest-xdist worker that needs the same reference (a scene's
+parity test and its statistics test) wait for the first one's render and read it, instead of
+rendering it again alongside.
 """
+import contextlib
+import fcntl
 import hashlib
 import inspect
 import json
@@ -43,9 +48,22 @@ def cache_path(spec):
     return CACHE_DIR / f"{spec.name}-{cache_key(spec)}.npz"
 
 
+@contextlib.contextmanager
+def _scene_lock(spec):
+    CACHE_DIR.mkdir(parents=True, exist_ok=True)
+    with open(CACHE_DIR / f"{spec.name}.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)         # released when the file closes
+        yield
+
+
 def cycles_images(spec):
     """(cycles_seeds, H, W, 4) float32 Cycles renders of spec, from the cache or rendered now.
     Returns (images, seconds spent rendering, or None when cached)."""
+    with _scene_lock(spec):
+        return _cached_or_rendered(spec)
+
+
+def _cached_or_rendered(spec):
     path = cache_path(spec)
     if path.exists():
         try:
@@ -58,7 +76,6 @@ def cycles_images(spec):
     t0 = time.perf_counter()
     images = rendering.render_seeds(spec, 'CYCLES', cycles_seeds(spec))
     seconds = time.perf_counter() - t0
-    CACHE_DIR.mkdir(parents=True, exist_ok=True)
     for stale in CACHE_DIR.glob(f"{spec.name}-*.npz"):     # older keys of this scene
         stale.unlink(missing_ok=True)
     fd, tmp = tempfile.mkstemp(dir=CACHE_DIR, suffix=".npz.part")

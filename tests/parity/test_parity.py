@@ -51,6 +51,7 @@ def check_parity(spec):
     return result
 
 
+@pytest.mark.long
 @pytest.mark.parametrize("spec", SPECS, ids=[s.name for s in SPECS])
 def test_parity_with_cycles(spec, parity_addon):
     check_parity(spec)
@@ -84,6 +85,7 @@ PRECISE = [dataclasses.replace(s, name=s.name + "_precise", cycles_samples=4 * s
 
 
 @pytest.mark.precise
+@pytest.mark.long
 @pytest.mark.parametrize("spec", PRECISE, ids=[s.name for s in PRECISE])
 def test_parity_with_cycles_precise(spec, parity_addon):
     check_parity(spec)
