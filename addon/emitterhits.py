@@ -26,7 +26,9 @@ class EmitterHits:
         MIS-weighted for BSDF rays (one native pass); each contribution clamped as Cycles'
         sample clamp (_found_classes); with light groups, each group's triangles again into its
         own array. shadow_set: with shadow linking, the set of blockers whose emitters are
-        gathered (0: those of none; the others by _gather_shadow_linked's retraced rays)."""
+        gathered (0: those of none; the others by _gather_shadow_linked's retraced rays). hit
+        None: every ray that met a triangle, read from the records (_bare_vertex: no light
+        linking, light groups or image emission there)."""
         if self._link is not None and not camera and path.prim is not None:
             # light linking: emitters do not light the objects their set leaves out
             prim = np.maximum(hits['prim'], 0)
@@ -94,9 +96,8 @@ class EmitterHits:
         the sun and the world where the ray misses everything; MIS-weighted for BSDF rays.
         One native pass over the rays for all lamps (dacrt.lamps.lamp_gather); with light
         passes, camera rays' emitters and world go to their two passes; with light groups,
-        each group's lamps (and the world) again into its own array. hit None: no flags, where
-        no gather here reads them (Integrator._flags_unread: BSDF rays with no lamp at infinity,
-        no world, or camera rays that see no lamp or world)."""
+        each group's lamps (and the world) again into its own array. hit None: no flags
+        (Integrator._flags_unread): the gathers read which rays missed from the hit records."""
         camera, classes = k == 0, self._found_classes(k, path)
         L, L_env = sinks.found(k), sinks.world(k)
         bounce = not camera and self._bounce_worlds is not None
@@ -118,7 +119,7 @@ class EmitterHits:
         if sinks.groups and combined_env is not None and self._world_group >= 0:
             envs.append((combined_env, sinks.groups[self._world_group]))
         groups = [(lamps, out) for lamps, out in groups if len(lamps)] + self._group_lamps(camera, sinks)
-        miss = None if hit is None else ~hit
+        miss = hits if hit is None else ~hit         # (the records: prim < 0, read in place)
         # camera rays past glass see the map by the world's Transmission visibility (_env_apart)
         past = path.transmit if camera and self._env_apart and path.transmit is not None else None
         for (e, out), (thr, clamp) in itertools.product(envs, classes):
@@ -131,8 +132,9 @@ class EmitterHits:
         if not groups:
             return
         # a lamp counts in front of the surface hit, or of the ray's end where it missed (the
-        # tracer leaves a miss at t = inf: only camera rays end sooner, at the clip end)
-        t_surf = np.where(hit, hits['t'], path.tmax) if camera else hits['t']
+        # tracer leaves a miss at t = inf: only camera rays end sooner, at the clip end; hit
+        # None: the camera rays see lamps at infinity alone, which read no t_surf)
+        t_surf = np.where(hit, hits['t'], path.tmax) if camera and hit is not None else hits['t']
         for (lamps, out), (thr_c, clamp) in itertools.product(groups, classes):
             for lamps, thr in self._linked(lamps, path, thr_c, camera):
                 for lamps, pdf in self._mis_pdfs(lamps, path, k, camera):

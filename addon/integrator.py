@@ -389,6 +389,7 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
         self._skipped_shadow = 0        # light samples that could not contribute: no ray traced
         self._fused_scene = None        # whether diffuse vertices may take one native pass (_fused)
         self._bare_scene = None         # whether vertices may go without hit flags (_flags_unread)
+        self._bare_camera = None        # ... and camera vertices too (set with it)
         self._rough_fused = None        # _fused_rough's arrays, made once
         self._samples_skipped = 0       # (pixel, sample) paths adaptive sampling did not take
         # bounce rays not traced, by reason: the surface is black, Russian roulette, the last
@@ -1184,30 +1185,34 @@ class Integrator(LightSetup, SurfaceValues, Translucency, Transparency, PassWrit
                       dark_pdf=None if nee is None else (pdf * nee).astype(F32))
 
     def _flags_unread(self, camera, path, sinks, k):
-        """Whether vertex k of these paths reads the hit flags (prim >= 0) nowhere but in the
-        fused pass (_diffuse_vertex), which reads prim itself: no transparency, emissive
-        triangles, translucent bounce limits, shadow linking, bounce worlds, world or lamp at
-        infinity for BSDF rays (their gather reads which rays missed); for camera rays also an
-        opaque film without holdouts, data or light passes, and no lamp or world they see. The
-        flags had been a read of the 16-byte hit records on the calling thread at every vertex
-        (numpy's INT_greater_equal, ~1% of a Cornell render's CPU)."""
+        """Whether vertex k of these paths needs no hit flags (prim >= 0): the fused pass
+        (_diffuse_vertex) reads prim itself, and the gathers of the lamps, the world and the
+        emissive triangles read it from the records in place (_bare_vertex): no transparency,
+        translucent bounce limits, shadow linking or bounce worlds; for camera rays also an
+        opaque film without holdouts, data or light passes, and no finite lamp they see (whose
+        gather is bounded by each ray's end, the clip end where it missed). The flags had been a read of the 16-byte hit records on
+        the calling thread at every vertex, then their negation for the gathers (numpy's
+        INT_greater_equal, ~1% of a Cornell render's CPU; more on the world-lit scenes, whose
+        camera rays also made them)."""
         if self._bare_scene is None:
             self._bare_scene = bool(
-                not self._any_transparent and not self._any_emissive and not self._translucent_apart
-                and not len(self._bsdf_linked) and not len(self._linked_tri_sets) and self._bounce_worlds is None
-                and self.lights.environment is None
-                and not any(self._record_lamps[j].at_infinity for j in self._bsdf_lamps))
+                not self._any_transparent and not self._translucent_apart
+                and not len(self._bsdf_linked) and not len(self._linked_tri_sets) and self._bounce_worlds is None)
+            self._bare_camera = self._all_opaque and not self._data_passes and all(
+                self._record_lamps[j].at_infinity for j in self._camera_lamps)
         if not self._bare_scene or path.dead is not None or path.xb is not None or not self._fused(path, sinks, k):
             return False
-        return not camera or (self._all_opaque and not self._data_passes and not sinks.split
-                              and not len(self._camera_lamps) and self._camera_env is None)
+        return not camera or (self._bare_camera and not sinks.split and path.transmit is None)
 
     def _bare_vertex(self, k, path, hits, sinks):
-        """_vertex where _flags_unread: the lamps gathered without flags, then (before the last
-        segment's end) _diffuse_vertex with hit None, whose pass takes the records with prim >= 0
-        as the hits; where none is, it keeps no path, as _vertex's early return. The same
-        numbers as _vertex's steps."""
+        """_vertex where _flags_unread: the lamps, the world and the emissive triangles gathered
+        without flags (read from the records), then (before the last segment's end)
+        _diffuse_vertex with hit None, whose pass takes the records with prim >= 0 as the hits;
+        where none is, it keeps no path, as _vertex's early return. The same numbers as
+        _vertex's steps."""
         self._gather_lamps(path, None, hits, sinks, k)
+        if self._any_emissive:
+            self._gather_emission(k == 0, None, hits, path, sinks.found(k), k, sinks.groups)
         if k == self.max_bounces + 1:
             return None
         return self._diffuse_vertex(k, path, hits, None, sinks,

@@ -234,6 +234,31 @@ std::shared_ptr<LightTree> make_tree(F32Array lo, F32Array hi, F32Array axis, F3
     return std::make_shared<LightTree>(in);  // it validates: std::invalid_argument is ValueError
 }
 
+// Which of n rays missed (missflags.h): bool flags, or the tracer's (n,) hit records
+// (dacrt.HIT_DTYPE), read in place as prim < 0 so that the caller makes no flags from them.
+// keep holds the flags' array.
+Missed missed_arg(const py::object& miss, size_t n, py::array_t<bool, py::array::c_style>& keep) {
+    if (py::isinstance<py::array>(miss)) {
+        const py::array a = miss.cast<py::array>();
+        const py::object fields = a.dtype().attr("fields");
+        if (!fields.is_none()) {  // structured: it must be the hit records
+            const py::tuple prim = fields.contains("prim") ? fields["prim"].cast<py::tuple>() : py::tuple();
+            const bool prim_at = prim.size() >= 2 && prim[0].cast<py::dtype>().kind() == 'i' &&
+                                 prim[0].cast<py::dtype>().itemsize() == 4 &&
+                                 prim[1].cast<size_t>() == offsetof(Hit, prim);
+            if (!prim_at || a.ndim() != 1 || a.itemsize() != sizeof(Hit) || !(a.flags() & py::array::c_style))
+                throw py::value_error("miss must be bool flags or a contiguous (n,) array of the tracer's " +
+                                      std::to_string(sizeof(Hit)) + "-byte hit records (HIT_DTYPE), got " +
+                                      shape_str(a) + " of " + py::str(a.dtype()).cast<std::string>());
+            need_shape(a, 0, n, "miss");
+            return Missed{nullptr, static_cast<const Hit*>(a.data())};
+        }
+    }
+    keep = miss.cast<py::array_t<bool, py::array::c_style>>();
+    need_shape(keep, 0, n, "miss");
+    return Missed{reinterpret_cast<const uint8_t*>(keep.data()), nullptr};
+}
+
 void lamp_gather_py(F32Array records, I32Array lamps, py::object lamp_prob, F32Array O, F32Array D,
                     py::array_t<float> t_surf, py::object miss, py::object thr,
                     py::object pdf_bsdf, I64Array pid, py::array L, float clamp, py::object tree, py::object lamp_key,
@@ -266,9 +291,9 @@ void lamp_gather_py(F32Array records, I32Array lamps, py::object lamp_prob, F32A
     // miss is read for the lamps at infinity alone: without one it may be None (the caller
     // then makes no flags from the hit records)
     py::array_t<bool, py::array::c_style> miss_keep;
+    Missed missed;
     if (!miss.is_none()) {
-        miss_keep = miss.cast<py::array_t<bool, py::array::c_style>>();
-        need_shape(miss_keep, 0, n, "miss");
+        missed = missed_arg(miss, n, miss_keep);
     } else {
         for (size_t k = 0; k < nl; ++k)
             if (at_infinity(rec[lamp_list[k]]))
@@ -276,7 +301,6 @@ void lamp_gather_py(F32Array records, I32Array lamps, py::object lamp_prob, F32A
                                       std::to_string(lamp_list[k]) +
                                       " is at infinity (a sun or the background): it needs which rays missed");
     }
-    const uint8_t* missed = miss.is_none() ? nullptr : reinterpret_cast<const uint8_t*>(miss_keep.data());
     need_shape(pid, 0, n, "pid");
     F32Array prob_keep, thr_keep, pdf_keep;
     const float* prob = optional_f32(lamp_prob, 0, R, "lamp_prob", prob_keep);
@@ -819,7 +843,7 @@ py::tuple environment_sample_py(const EnvironmentMap& env, F32Array u1, F32Array
     return py::make_tuple(wi, value, pdf);
 }
 
-void environment_gather_py(const EnvironmentMap& env, float prob, F32Array D, py::array_t<bool, py::array::c_style> miss,
+void environment_gather_py(const EnvironmentMap& env, float prob, F32Array D, py::object miss,
                            py::object thr, py::object pdf_bsdf, I64Array pid, py::array L, float clamp) {
     check_clamp(clamp);
     if (!(prob >= 0 && prob <= 1)) throw py::value_error("prob must be in [0, 1], got " + std::to_string(prob));
@@ -827,14 +851,14 @@ void environment_gather_py(const EnvironmentMap& env, float prob, F32Array D, py
         throw py::value_error("prob > 0 (BSDF rays, MIS) needs pdf_bsdf; prob 0 (camera rays) takes none");
     if (D.ndim() != 2 || D.shape(0) != 3) throw py::value_error("D must have shape (3, n), got " + shape_str(D));
     const size_t n = size_t(D.shape(1));
-    need_shape(miss, 0, n, "miss");
+    py::array_t<bool, py::array::c_style> miss_keep;
+    const Missed missed = missed_arg(miss, n, miss_keep);
     need_shape(pid, 0, n, "pid");
     F32Array thr_keep, pdf_keep;
     const float* t = optional_f32(thr, 3, n, "thr", thr_keep);
     const float* pb = optional_f32(pdf_bsdf, 0, n, "pdf_bsdf", pdf_keep);
     gather_into(L, pid, n, [&](float* out, size_t N) {
-        environment_gather(env, prob, D.data(), reinterpret_cast<const uint8_t*>(miss.data()), t, pb, pid.data(), n,
-                           out, N, clamp);
+        environment_gather(env, prob, D.data(), missed, t, pb, pid.data(), n, out, N, clamp);
     });
 }
 

@@ -397,7 +397,7 @@ py::tuple continue_paths_py(py::array hits, py::array_t<bool, py::array::c_style
     return py::make_tuple(idx, thr_out, black, rr, surf, prim, taken);
 }
 
-size_t gather_emission_py(py::array hits, py::array_t<bool, py::array::c_style> hit, F32Array emission,
+size_t gather_emission_py(py::array hits, py::object hit, F32Array emission,
                           py::array_t<bool, py::array::c_style> emissive, py::object tri_prob, F32Array area,
                           F32Array geo, F32Array O, F32Array D, py::object thr, py::object pdf, I64Array pid,
                           py::array_t<float, py::array::c_style> L, float clamp, py::object tree,
@@ -405,7 +405,13 @@ size_t gather_emission_py(py::array hits, py::array_t<bool, py::array::c_style> 
     check_clamp(clamp);
     const size_t n = hits.ndim() == 1 ? size_t(hits.shape(0)) : 0;
     const Hit* h = records<Hit>(hits, n, "hits");
-    need_len(hit, n, "hit");
+    // hit None: every ray, those of prim < 0 left out as a missed one is (the caller makes no
+    // flags from the records)
+    py::array_t<bool, py::array::c_style> hit_keep;
+    if (!hit.is_none()) {
+        hit_keep = hit.cast<py::array_t<bool, py::array::c_style>>();
+        need_len(hit_keep, n, "hit");
+    }
     const size_t M = rows_of(geo, 15, "geo");
     if (rows_of(emission, 3, "emission") != M) throw py::value_error("emission must have shape (3, M) like geo");
     need_len(emissive, M, "emissive");
@@ -440,7 +446,8 @@ size_t gather_emission_py(py::array hits, py::array_t<bool, py::array::c_style> 
     }
     const uint64_t* recv = receivers.is_none() ? nullptr : recv_keep.data();
     py::gil_scoped_release nogil;
-    return gather_emission(h, reinterpret_cast<const uint8_t*>(hit.data()), n, emission.data(),
+    return gather_emission(h, hit.is_none() ? nullptr : reinterpret_cast<const uint8_t*>(hit_keep.data()), n,
+                           emission.data(),
                            reinterpret_cast<const uint8_t*>(emissive.data()), prob, area.data(), geo.data(), M,
                            O.data(), D.data(), t, pd, pid.data(), L.mutable_data(), N, clamp, lt,
                            lt ? key_keep.data() : nullptr, nv, recv);

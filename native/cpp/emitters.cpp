@@ -46,7 +46,8 @@ size_t gather_emission(const Hit* hits, const uint8_t* hit, size_t n, const floa
         size_t local = 0;
         for (size_t i = b; i < e; ++i) {
             const int32_t p = __atomic_load_n(&hits[i].prim, __ATOMIC_RELAXED);
-            if (!hit[i] || p < 0 || size_t(p) >= M || !emissive[p]) continue;
+            // (hit null: every ray, a missed one, prim < 0, left out as by the flags)
+            if ((hit && !hit[i]) || p < 0 || size_t(p) >= M || !emissive[p]) continue;
             const size_t q = size_t(p);
             float w = 1.0f;
             if (tri_prob && tri_prob[q] > 0) {  // a BSDF ray: power heuristic against light sampling

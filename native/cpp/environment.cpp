@@ -233,7 +233,7 @@ void blend_places(const EnvironmentMap& env, const float* u, const float* v, con
 inline bool blends_in_lanes(const EnvironmentMap& env) { return !env.closest && !env.srgb; }
 
 // The missed rays of [b, e) in chunks: their (u, v) lane by lane (envlanes.h), then the lookups.
-void gather_range(const EnvironmentMap* env, float prob, const float* D, const uint8_t* miss, const float* thr,
+void gather_range(const EnvironmentMap* env, float prob, const float* D, Missed miss, const float* thr,
                   const float* pdf_bsdf, const int64_t* pid, size_t n, float* L, size_t N, float clamp, size_t b, size_t e) {
     constexpr size_t K = 64;
     size_t idx[K];
@@ -248,7 +248,7 @@ void gather_range(const EnvironmentMap* env, float prob, const float* D, const u
         size_t m = 0;
         for (; i < e && m < K; ++i) {
             idx[m] = i, dx[m] = D[i], dy[m] = D[n + i], dz[m] = D[2 * n + i];
-            m += miss[i] != 0;
+            m += miss(i);
         }
         equirect_uv_lanes(env->to_map, dx, dy, dz, m, us, vs, ss);
         if (lanes) {
@@ -344,7 +344,7 @@ void environment_sample_lanes(const EnvironmentMap& env, const float* u1, const 
     }
 }
 
-void environment_gather(const EnvironmentMap& env, float prob, const float* D, const uint8_t* miss,
+void environment_gather(const EnvironmentMap& env, float prob, const float* D, Missed miss,
                         const float* thr, const float* pdf_bsdf, const int64_t* pid, size_t n, float* L, size_t N,
                         float clamp) {
     const EnvironmentMap* e = &env;

@@ -32,6 +32,8 @@
 #include <string>
 #include <vector>
 
+#include "missflags.h"
+
 namespace dacrt {
 
 struct EnvironmentMap {
@@ -72,9 +74,9 @@ void environment_sample_lanes(const EnvironmentMap& env, const float* u1, const 
                               float* value, float* pdf, size_t stride);
 
 // What rays that missed everything see of the map: L[:, pid[i]] (stride N) += thr x Le x w
-// where miss[i], thr null = 1, w = 1 when prob is 0 (camera rays), else the power heuristic
+// where miss(i) (missflags.h: flags or the hit records), thr null = 1, w = 1 when prob is 0 (camera rays), else the power heuristic
 // 1 / (1 + (prob pdf_env / pdf_bsdf)^2). pid distinct (threads split by ray).
-void environment_gather(const EnvironmentMap& env, float prob, const float* D, const uint8_t* miss,
+void environment_gather(const EnvironmentMap& env, float prob, const float* D, Missed miss,
                         const float* thr, const float* pdf_bsdf, const int64_t* pid, size_t n, float* L, size_t N,
                         float clamp);
 

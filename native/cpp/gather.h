@@ -17,7 +17,7 @@ struct Gather {
     const int32_t* lamps;
     size_t nl;
     const float *lamp_prob, *O, *D, *t_surf;
-    const uint8_t* miss;
+    Missed miss;
     const float *thr, *pdf_bsdf;
     const int64_t* pid;
     size_t n;
@@ -68,7 +68,7 @@ __attribute__((always_inline)) inline void gather_one(const Gather& g, const Lam
     const float o[3] = {g.O[i], g.O[n + i], g.O[2 * n + i]};
     const float d[3] = {g.D[i], g.D[n + i], g.D[2 * n + i]};
     float Le[3] = {0.0f, 0.0f, 0.0f}, pdf_l = 0.0f;
-    const bool seen = infinite ? g.miss[i] && miss_lamp(lamp, d, Le, pdf_l)
+    const bool seen = infinite ? g.miss(i) && miss_lamp(lamp, d, Le, pdf_l)
                                : hit_lamp(lamp, o, d, g.t_surf[i * g.t_step], Le, pdf_l);
     // most rays see none of the lamps they are tested against (a sun's disk, a small lamp the
     // boxes or BVH list as near): they add nothing and are done, without the weight, the clamp and the

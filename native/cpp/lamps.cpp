@@ -92,7 +92,7 @@ void gather_infinite(const Gather& g, const LampRecord& lamp, int32_t key, size_
             const size_t i = i0 + q;
             const float d[3] = {Dx[i], Dy[i], Dz[i]};
             idx[m] = uint32_t(q);
-            m += size_t(g.miss[i] != 0) & size_t(!sun || in_sun_disk(lamp, d));
+            m += size_t(g.miss(i)) & size_t(!sun || in_sun_disk(lamp, d));
         }
         for (size_t q = 0; q < m; ++q) {  // each listed ray sees the lamp: miss_lamp's radiance
             const size_t i = i0 + idx[q];
@@ -186,7 +186,7 @@ void gather_range_bvh(Gather g, const LampBVH& bvh, const std::vector<int32_t>& 
         const float o[3] = {g.O[i], g.O[g.n + i], g.O[2 * g.n + i]};
         const float d[3] = {g.D[i], g.D[g.n + i], g.D[2 * g.n + i]};
         bvh.visit(o, d, g.t_surf[i * g.t_step], cand);
-        if (!infinite.empty() && g.miss[i]) cand.insert(cand.end(), infinite.begin(), infinite.end());
+        if (!infinite.empty() && g.miss(i)) cand.insert(cand.end(), infinite.begin(), infinite.end());
         std::sort(cand.begin(), cand.end());
         for (int32_t k : cand) {
             const LampRecord& lamp = g.rec[g.lamps[k]];
@@ -203,7 +203,7 @@ void lamp_sample(const LampRecord* rec, size_t R, const int32_t* entry, const fl
 }
 
 void lamp_gather(const LampRecord* rec, const int32_t* lamps, size_t nl, const float* lamp_prob, const float* O,
-                 const float* D, const float* t_surf, const uint8_t* miss, const float* thr, const float* pdf_bsdf,
+                 const float* D, const float* t_surf, Missed miss, const float* thr, const float* pdf_bsdf,
                  const int64_t* pid, size_t n, float* L, size_t N, float clamp, const LightTree* tree,
                  const int32_t* lamp_key, const float* normal, const uint64_t* receivers, size_t t_step) {
     const Gather g{rec,  lamps, nl, lamp_prob, O,     D,        t_surf, miss,   thr,      pdf_bsdf,

@@ -21,6 +21,7 @@
 
 #include "ies.h"
 #include "lighttree.h"
+#include "missflags.h"
 #if defined(__SSE2__) || defined(_M_X64)
 #include <emmintrin.h>
 #endif
@@ -78,8 +79,8 @@ void lamp_sample(const LampRecord* rec, size_t R, const int32_t* entry, const fl
                  const float* u2, size_t n, float* wi, float* dist, float* value, float* pdf);
 
 // What rays (O, D: 3 rows, stride n) see of the lamps rec[lamps[0..nl)]: a finite lamp where
-// it is met at t < t_surf[i * t_step], a lamp at infinity where miss[i] (miss, read for those
-// alone, may be null when no lamp is at infinity). L[:, pid[i]] (stride N) +=
+// it is met at t < t_surf[i * t_step], a lamp at infinity where miss(i) (missflags.h: flags or
+// the hit records; read for those alone, it may be neither when no lamp is at infinity). L[:, pid[i]] (stride N) +=
 // thr x radiance x w, lamp by lamp in list order, with thr null = 1 and w = 1 when lamp_prob
 // is null (camera rays), else the power heuristic 1 / (1 + (lamp_prob[j] pdf_l / pdf_bsdf)^2).
 // With a light tree, a record j with lamp_key[j] >= 0 is that member of it: its selection
@@ -88,7 +89,7 @@ void lamp_sample(const LampRecord* rec, size_t R, const int32_t* entry, const fl
 // receivers (n; null: none) the receiver mask of that vertex's object (LightTree::pdf).
 // pid must be distinct (threads split by ray).
 void lamp_gather(const LampRecord* rec, const int32_t* lamps, size_t nl, const float* lamp_prob, const float* O,
-                 const float* D, const float* t_surf, const uint8_t* miss, const float* thr, const float* pdf_bsdf,
+                 const float* D, const float* t_surf, Missed miss, const float* thr, const float* pdf_bsdf,
                  const int64_t* pid, size_t n, float* L, size_t N, float clamp, const LightTree* tree = nullptr,
                  const int32_t* lamp_key = nullptr, const float* normal = nullptr,
                  const uint64_t* receivers = nullptr, size_t t_step = 1);

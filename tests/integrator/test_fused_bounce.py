@@ -7,6 +7,7 @@ import pytest
 
 import dacrt
 import addon.integrator as integrator_module
+from addon import scenedata as sd
 
 from .scenes import (ALL_VIS, cornell_box, geometry, icosphere, light, material, ortho_down, plane_scene, render,
                      rotation_x, translation)
@@ -118,23 +119,28 @@ def _with_flags(scene, monkeypatch):
     return flagless, render(scene), bare
 
 
-@pytest.mark.parametrize('extra', ['none', 'point', 'sun', 'world', 'camera_lamp'])
+@pytest.mark.parametrize('extra', ['none', 'point', 'sun', 'world', 'environment', 'emissive', 'camera_lamp'])
 def test_vertices_without_hit_flags_are_bit_identical(monkeypatch, extra):
-    """Where nothing but the fused pass reads the hit flags (prim >= 0), none are made: the pass
-    takes the records with a triangle as the hits, the lamp gather goes without misses. The
-    image, ray counts and ended paths bit for bit those of the flags made; a sun or a world
-    (which the rays that missed see) or a lamp the camera sees keeps them (at the camera vertex
-    or at all), and renders alike too."""
-    scene = cornell_box(40, 30, 16, 4, area_light=True)
-    scene.lights[0].visible_camera = extra == 'camera_lamp'    # (Blender's default: unseen)
+    """Where the hit flags (prim >= 0) are read by nothing the records cannot tell, none are
+    made: the fused pass takes the records with a triangle as the hits, the gathers of the
+    lamps, the sun, the world (a colour or a map) and the emissive triangles read them too
+    (a miss is prim < 0). The image, ray counts and ended paths bit for bit those of the flags
+    made; an area lamp the camera sees (its gather ends at each camera ray's end) keeps them at
+    the camera vertex, and renders alike too."""
+    scene = cornell_box(40, 30, 16, 4, area_light=extra != 'emissive')
+    if extra != 'emissive':
+        scene.lights[0].visible_camera = extra == 'camera_lamp'    # (Blender's default: unseen)
     if extra == 'point':
         scene.lights.append(light('POINT', 5.0, translation(0.2, 0.3, 0.7)))
     elif extra == 'sun':
         scene.lights.append(light('SUN', 2.0, rotation_x(-1.2), angle=0.1))
     elif extra == 'world':
         scene.world = np.array([0.3, 0.4, 0.5], np.float32)
+    elif extra == 'environment':
+        texels = (np.random.default_rng(5).random((8, 16, 3)) ** 3).astype(np.float32) * 4
+        scene.environment = sd.Environment(texels, np.ones(3, np.float32), np.eye(3), 'Linear')
     flagless, flagged, bare = _with_flags(scene, monkeypatch)
     # the camera vertex, 4 bounces and the last segment's end (K + 1: lamps gathered only)
-    assert bare == {'none': set(range(6)), 'point': set(range(6)), 'camera_lamp': set(range(1, 6))}.get(extra, set())
+    assert bare == (set(range(1, 6)) if extra == 'camera_lamp' else set(range(6)))
     _same(flagless, flagged)
     assert flagless.film.combined()[..., :3].mean() > 0

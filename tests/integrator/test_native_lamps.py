@@ -628,3 +628,61 @@ def test_gather_without_miss_flags_where_no_lamp_is_at_infinity(count, bsdf):
         with pytest.raises(ValueError, match=rf'miss is None, but lamps\[{count}\] = {count} is at infinity'):
             dacrt.lamps.lamp_gather(with_far, np.arange(count + 1), O, D, t_surf, None, pid, L, **kw)
         assert L.tobytes() == L0.tobytes()
+
+
+def _records_missing(rng, miss):
+    """The tracer's hit records (dacrt.HIT_DTYPE) of rays whose misses are miss: prim -1 there,
+    a triangle index (0 among them) elsewhere, and t, u, v at random."""
+    hits = np.empty(len(miss), dacrt.HIT_DTYPE)
+    hits['t'] = rng.uniform(0.0, 30.0, len(miss))
+    hits['prim'] = np.where(miss, -1, rng.integers(0, 1 << 30, len(miss)))
+    hits['prim'][np.flatnonzero(~miss)[:5]] = 0
+    hits['u'], hits['v'] = rng.random(len(miss)), rng.random(len(miss))
+    return hits
+
+
+@pytest.mark.parametrize('count', [2, 12, 100])
+@pytest.mark.parametrize('bsdf', [False, True])
+def test_gather_reads_the_misses_from_the_hit_records(count, bsdf):
+    """Given the tracer's hit records as miss, lamp_gather reads which rays missed from them in
+    place (prim < 0), so the integrator makes no flags: every sum bit for bit the one with the
+    flags given, for a list of the sun and the world alone, and lists mixing them with finite
+    lamps through the boxes (up to 64 lamps) and the BVH beyond. Any other structured array is
+    refused with a clear error, the film untouched."""
+    rng = np.random.default_rng(count + 11 * bsdf)
+    if count == 2:                            # (lamps at infinity only: gather_infinite's lists)
+        lamps = [make('sun_angle'), make('background')]
+    else:
+        lamps = [lamp for lamp in many_lamps(rng, 3 * count) if not lamp.at_infinity][:count - 2]
+        lamps[count // 3:count // 3] = [make('sun_angle')]
+        lamps.append(make('background'))
+    assert len(lamps) == count
+    rec = lamp_records(lamps)
+    n, N = 20_000, 25_000
+    O, D, t_surf, miss = rays_at_lamps(rng, [lamp for lamp in lamps if not lamp.at_infinity] or
+                                       [make('area_rectangle')], n)
+    sun = lamps[count // 3 if count > 2 else 0]
+    D[:, rng.random(n) < 0.3] = np.asarray(sun.to_sun, F32)[:, None]     # (in the sun's disk)
+    hits = _records_missing(rng, miss)
+    pid = rng.permutation(N)[:n]
+    kw = {}
+    if bsdf:
+        kw = dict(thr=rng.uniform(0.1, 2.0, (3, n)).astype(F32), pdf_bsdf=rng.uniform(0.01, 1.0, n).astype(F32),
+                  lamp_prob=rng.uniform(0.05, 1.0, count).astype(F32))
+    L0 = rng.uniform(0.0, 1.0, (3, N)).astype(F32)
+    given, read = L0.copy(), L0.copy()
+    listed = np.arange(count, dtype=np.int32)
+    dacrt.lamps.lamp_gather(rec, listed, O, D, t_surf, miss, pid, given, **kw)
+    dacrt.lamps.lamp_gather(rec, listed, O, D, t_surf, hits, pid, read, **kw)
+    # (the sun's and the world's: a gather with no ray missed differs)
+    unseen = L0.copy()
+    dacrt.lamps.lamp_gather(rec, listed, O, D, t_surf, np.zeros(n, bool), pid, unseen, **kw)
+    assert (given != unseen).any(axis=0).sum() > 1000, 'too few rays see the lamps at infinity to test it'
+    assert given.tobytes() == read.tobytes()
+    other = np.zeros(n, [('t', '<f4'), ('prim', '<i8'), ('u', '<f4')])
+    for bad in (other, hits[::2], np.zeros(n, [('a', '<f8'), ('b', '<f8')])):
+        L = L0.copy()
+        with pytest.raises(ValueError, match=r"miss must be bool flags or .*hit records"):
+            dacrt.lamps._core.lamp_gather(rec, listed, kw.get('lamp_prob'), O, D, t_surf, bad, kw.get('thr'),
+                                          kw.get('pdf_bsdf'), pid.astype(np.int64), L)
+        assert L.tobytes() == L0.tobytes()

@@ -195,6 +195,39 @@ def test_bsdf_gather_weighs_eval_by_the_power_heuristic(interpolation):
     assert (pdf[miss] > 0).any() and (pdf[miss] == 0).any()
 
 
+@pytest.mark.parametrize("prob", [0.0, 0.375])
+def test_gather_reads_the_misses_from_the_hit_records(prob):
+    """Given the tracer's hit records (dacrt.HIT_DTYPE) as miss, the gather reads which rays
+    missed from them in place (prim < 0), so the integrator makes no flags: the sums bit for bit
+    those of the flags given, camera rays (prob 0) and BSDF rays alike. Other structured arrays
+    are refused, naming miss, the film untouched."""
+    import dacrt
+    import dacrt.lamps as lamps
+    rng = np.random.default_rng(23)
+    env = lamps.environment_map((rng.random((12, 24, 3)) ** 3).astype(F32) * 3, _rotation(rng), "Linear")
+    n, N = 3000, 3500
+    D = _directions(rng, n)
+    D = np.ascontiguousarray(D / np.linalg.norm(D.astype(np.float64), axis=0).astype(F32))
+    miss = rng.random(n) < 0.6
+    hits = np.empty(n, dacrt.HIT_DTYPE)
+    hits["t"], hits["u"], hits["v"] = rng.random(n), rng.random(n), rng.random(n)
+    hits["prim"] = np.where(miss, -1, rng.integers(0, 1 << 30, n))
+    hits["prim"][np.flatnonzero(~miss)[:3]] = 0
+    thr, pb = (rng.uniform(0.1, 1, (3, n)).astype(F32), rng.uniform(0.05, 2, n).astype(F32)) if prob else (None, None)
+    pid = rng.permutation(N)[:n].astype(np.int64)
+    L0 = rng.random((3, N)).astype(F32)
+    given, read = L0.copy(), L0.copy()
+    env.gather(prob, D, miss, thr, pb, pid, given)
+    env.gather(prob, D, hits, thr, pb, pid, read)
+    assert (given != L0).any(axis=0).sum() > n // 2
+    assert given.tobytes() == read.tobytes()
+    for bad in (np.zeros(n, [("t", "<f4"), ("prim", "<i8"), ("u", "<f4")]), hits[::2], hits[:-1]):
+        L = L0.copy()
+        with pytest.raises(ValueError, match="miss"):
+            env.gather(prob, D, bad, thr, pb, pid, L)
+        assert L.tobytes() == L0.tobytes()
+
+
 _ISA_GATHER_RUN = """
 import sys
 import numpy as np

@@ -18,6 +18,7 @@ import numpy as np
 
 from . import _core
 from .shading import _check_added_to
+from . import HIT_DTYPE as _HIT_DTYPE  # (set before the package imports this module)
 
 __all__ = ["RECORD_WIDTH", "KINDS", "record_layout", "lamp_sample", "lamp_gather", "ies_register", "ies_lookup", "ies_live", "IesProfile", "IES_MAX_TABLES", "EnvironmentMap", "texel_stats", "LightTree", "light_tree",
            "environment_map"]
@@ -92,8 +93,10 @@ def lamp_gather(records, lamps, O, D, t_surf, miss, pid, L, thr=None, pdf_bsdf=N
     records[lamps] (lamps: record indices, in the order their light is added).
 
     A finite lamp counts where the ray meets it at t < t_surf (n,) (the surface hit, or the
-    ray's length); a lamp at infinity (sun, background) counts where miss (n,) bool is set
-    (miss may be None where no lamp is at infinity: nothing else reads it).
+    ray's length); a lamp at infinity (sun, background) counts where miss (n,) bool is set, or,
+    given the tracer's hit records (n,) (HIT_DTYPE) as miss, where their prim < 0, read in place
+    (the caller then makes no flags); miss may be None where no lamp is at infinity: nothing
+    else reads it.
     Lamps are not geometry: a ray collects every lamp it passes. L[:, pid[i]] += thr x Le x w
     (pid (n,) distinct column indices; thr (3, n) path throughput or None = 1). For BSDF rays
     give lamp_prob (R,) (each record's light-selection probability) and pdf_bsdf (n,): w is the
@@ -117,8 +120,8 @@ def lamp_gather(records, lamps, O, D, t_surf, miss, pid, L, thr=None, pdf_bsdf=N
     if pid.dtype.kind not in "iu":
         raise ValueError(f"pid must be an integer array of columns of L, got dtype {pid.dtype}")
     miss = None if miss is None else np.asarray(miss)
-    if miss is not None and miss.dtype != np.bool_:
-        raise ValueError(f"miss must be a bool array, got dtype {miss.dtype}")
+    if miss is not None and miss.dtype != np.bool_ and miss.dtype != _HIT_DTYPE:
+        raise ValueError(f"miss must be a bool array or the tracer's hit records (HIT_DTYPE), got dtype {miss.dtype}")
     opt = lambda a: None if a is None else _f32(a)
     _core.lamp_gather(records, np.ascontiguousarray(lamps, np.int32), opt(lamp_prob), _f32(O), _f32(D), _f32_1d(t_surf),
                       None if miss is None else np.ascontiguousarray(miss), opt(thr), opt(pdf_bsdf),

@@ -474,7 +474,8 @@ def gather_emission(hits, hit, emission, emissive, tri_prob, area, geo, O, D, th
                     clamp: float = np.inf, tree=None, tri_key=None, N=None, receivers=None) -> int:
     """Add the emission that rays meet on emissive triangles to L (3, N) in place (two-sided).
 
-    Rays i with hit[i] whose triangle hits['prim'][i] has emissive[prim] (bool (M,)) add
+    Rays i with hit[i] (hit None: every ray that met a triangle, read from hits in place, so the
+    caller makes no flags) whose triangle hits['prim'][i] has emissive[prim] (bool (M,)) add
     emission[:, prim] ((3, M) radiance) x thr[:, i] (None: 1) x, when tri_prob (M,) is given
     (BSDF rays), the power-heuristic weight against light-sampling that triangle,
     1 / (1 + (tri_prob pdf_light / pdf)^2) with pdf (n,) the rays' BSDF pdf and pdf_light the
@@ -486,7 +487,8 @@ def gather_emission(hits, hit, emission, emissive, tri_prob, area, geo, O, D, th
     of their objects; None: every set).
     Returns how many rays met emission."""
     _check_added_to(L)
-    return _core.gather_emission(hits, np.ascontiguousarray(hit, np.bool_), _rows(emission, 3, "emission"),
+    return _core.gather_emission(hits, None if hit is None else np.ascontiguousarray(hit, np.bool_),
+                                 _rows(emission, 3, "emission"),
                                  np.ascontiguousarray(emissive, np.bool_),
                                  None if tri_prob is None else np.ascontiguousarray(tri_prob, _F32),
                                  np.ascontiguousarray(area, _F32), _rows(geo, 15, "geo"), _rows(O, 3, "O"),
