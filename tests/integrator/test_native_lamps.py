@@ -592,6 +592,18 @@ def test_lamp_gather_checks_pids_at_every_place_and_length():
                 assert np.array_equal(L3, L)
 
 
+def _gather_inputs(rng, n, N, count, bsdf):
+    """lamp_gather's other inputs for n rays and count listed lamps: distinct columns pid of an
+    (3, N) film L0 at random, the BSDF rays' thr, pdf_bsdf and lamp_prob (bsdf) or none, and the
+    list 0..count."""
+    pid = rng.permutation(N)[:n]
+    kw = {}
+    if bsdf:
+        kw = dict(thr=rng.uniform(0.1, 2.0, (3, n)).astype(F32), pdf_bsdf=rng.uniform(0.01, 1.0, n).astype(F32),
+                  lamp_prob=rng.uniform(0.05, 1.0, count).astype(F32))
+    return pid, kw, rng.uniform(0.0, 1.0, (3, N)).astype(F32), np.arange(count, dtype=np.int32)
+
+
 @pytest.mark.parametrize('count', [1, 40, 100])
 @pytest.mark.parametrize('bsdf', [False, True])
 def test_gather_without_miss_flags_where_no_lamp_is_at_infinity(count, bsdf):
@@ -608,14 +620,8 @@ def test_gather_without_miss_flags_where_no_lamp_is_at_infinity(count, bsdf):
     rec = lamp_records(lamps)
     n, N = 20_000, 25_000
     O, D, t_surf, miss = rays_at_lamps(rng, lamps, n)
-    pid = rng.permutation(N)[:n]
-    kw = {}
-    if bsdf:
-        kw = dict(thr=rng.uniform(0.1, 2.0, (3, n)).astype(F32), pdf_bsdf=rng.uniform(0.01, 1.0, n).astype(F32),
-                  lamp_prob=rng.uniform(0.05, 1.0, count).astype(F32))
-    L0 = rng.uniform(0.0, 1.0, (3, N)).astype(F32)
+    pid, kw, L0, listed = _gather_inputs(rng, n, N, count, bsdf)
     given, flagless = L0.copy(), L0.copy()
-    listed = np.arange(count, dtype=np.int32)
     dacrt.lamps.lamp_gather(rec, listed, O, D, t_surf, miss, pid, given, **kw)
     dacrt.lamps.lamp_gather(rec, listed, O, D, t_surf, None, pid, flagless, **kw)
     assert (given != L0).any(axis=0).sum() > 50, 'too few rays see a lamp to test it'
@@ -664,14 +670,8 @@ def test_gather_reads_the_misses_from_the_hit_records(count, bsdf):
     sun = lamps[count // 3 if count > 2 else 0]
     D[:, rng.random(n) < 0.3] = np.asarray(sun.to_sun, F32)[:, None]     # (in the sun's disk)
     hits = _records_missing(rng, miss)
-    pid = rng.permutation(N)[:n]
-    kw = {}
-    if bsdf:
-        kw = dict(thr=rng.uniform(0.1, 2.0, (3, n)).astype(F32), pdf_bsdf=rng.uniform(0.01, 1.0, n).astype(F32),
-                  lamp_prob=rng.uniform(0.05, 1.0, count).astype(F32))
-    L0 = rng.uniform(0.0, 1.0, (3, N)).astype(F32)
+    pid, kw, L0, listed = _gather_inputs(rng, n, N, count, bsdf)
     given, read = L0.copy(), L0.copy()
-    listed = np.arange(count, dtype=np.int32)
     dacrt.lamps.lamp_gather(rec, listed, O, D, t_surf, miss, pid, given, **kw)
     dacrt.lamps.lamp_gather(rec, listed, O, D, t_surf, hits, pid, read, **kw)
     # (the sun's and the world's: a gather with no ray missed differs)

@@ -167,12 +167,9 @@ def test_a_ray_along_a_light_sample_gets_its_pdf():
     np.testing.assert_allclose(implied, pdf_l[use], rtol=2e-3)
 
 
-def test_gather_emission_without_flags_takes_the_rays_that_met_a_triangle():
-    """hit None: every ray that met a triangle (prim >= 0, read from the records in place, so
-    the integrator makes no flags) gathers, bit for bit as with hit = prim >= 0 given, camera
-    and BSDF rays alike, and the same count."""
-    rng = np.random.default_rng(29)
-    m, n, N = 12, 5000, 7000
+def _emission_inputs(rng, m, n, N):
+    """gather_emission's inputs at random: m triangles (geo, area, emission, emissive, tri_prob),
+    n rays' hit records (prim -1..m-1), O, D, thr, pdf, and distinct columns pid of a film of N."""
     geo, _ = _geo(rng, m)
     area = rng.uniform(0.1, 2.0, m).astype(F32)
     emission = rng.uniform(0, 5, (3, m)).astype(F32)
@@ -185,7 +182,16 @@ def test_gather_emission_without_flags_takes_the_rays_that_met_a_triangle():
     D = _unit(rng, n)
     thr = rng.uniform(0, 1, (3, n)).astype(F32)
     pdf = rng.uniform(0.05, 0.3, n).astype(F32)
-    pid = rng.permutation(N)[:n].astype(np.int64)
+    return geo, area, emission, emissive, tri_prob, hits, O, D, thr, pdf, rng.permutation(N)[:n].astype(np.int64)
+
+
+def test_gather_emission_without_flags_takes_the_rays_that_met_a_triangle():
+    """hit None: every ray that met a triangle (prim >= 0, read from the records in place, so
+    the integrator makes no flags) gathers, bit for bit as with hit = prim >= 0 given, camera
+    and BSDF rays alike, and the same count."""
+    rng = np.random.default_rng(29)
+    n, N = 5000, 7000
+    geo, area, emission, emissive, tri_prob, hits, O, D, thr, pdf, pid = _emission_inputs(rng, 12, n, N)
     for camera in (True, False):
         L0 = rng.uniform(0, 1, (3, N)).astype(F32)
         given, read = L0.copy(), L0.copy()
@@ -199,22 +205,10 @@ def test_gather_emission_without_flags_takes_the_rays_that_met_a_triangle():
 
 def test_gather_emission_matches_the_numpy_definition():
     rng = np.random.default_rng(21)
-    m, n, N = 12, 5000, 7000
-    geo, _ = _geo(rng, m)
-    area = rng.uniform(0.1, 2.0, m).astype(F32)
-    emission = rng.uniform(0, 5, (3, m)).astype(F32)
-    emissive = rng.random(m) < 0.6
+    n, N = 5000, 7000
+    geo, area, emission, emissive, tri_prob, hits, O, D, thr, pdf, pid = _emission_inputs(rng, 12, n, N)
     emission[:, ~emissive] = 0
-    tri_prob = np.where(rng.random(m) < 0.8, rng.uniform(0.01, 0.2, m), 0).astype(F32)
-    hits = np.zeros(n, dacrt.HIT_DTYPE)
-    hits['prim'] = rng.integers(-1, m, n)
-    hits['t'] = rng.uniform(0.1, 5, n)
     hit = (hits['prim'] >= 0) & (rng.random(n) < 0.9)           # some hits masked (holdouts)
-    O = (rng.normal(size=(3, n)) * 2).astype(F32)
-    D = _unit(rng, n)
-    thr = rng.uniform(0, 1, (3, n)).astype(F32)
-    pdf = rng.uniform(0.05, 0.3, n).astype(F32)
-    pid = rng.permutation(N)[:n].astype(np.int64)
     for camera in (True, False):
         L = rng.uniform(0, 1, (3, N)).astype(F32)
         expect = L.astype(np.float64)
