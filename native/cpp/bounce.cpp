@@ -11,6 +11,25 @@
 
 namespace dacrt {
 
+namespace {
+
+// The path columns survivors b..e-1 (idx) keep: pid, keys (2 rows) and pick (null: none). The
+// pointers are parameters, so the stores cannot be taken for writes to them: read through the
+// block's captured references they had been loaded again for each survivor.
+void take_path_columns(const int64_t* pid, const uint32_t* keys, const double* pick, size_t n, const int64_t* idx,
+                       size_t k, size_t b, size_t e, int64_t* pid_out, uint32_t* keys_out, double* pick_out) {
+    for (size_t j = b; j < e; ++j) {
+        const size_t i = size_t(idx[j]);
+        pid_out[j] = pid[i];
+        keys_out[j] = keys[i];
+        keys_out[k + j] = keys[n + i];
+    }
+    if (pick)
+        for (size_t j = b; j < e; ++j) pick_out[j] = pick[size_t(idx[j])];
+}
+
+}  // namespace
+
 size_t shade_bounce(const BounceIn& in, const LightChoice& lights, const int64_t* idx, size_t k,
                     const BounceOut& out, size_t* skipped) {
     const size_t n = in.n, blocks = (k + kEventBlock - 1) / kEventBlock;
@@ -40,13 +59,7 @@ size_t shade_bounce(const BounceIn& in, const LightChoice& lights, const int64_t
         const size_t b = q * kEventBlock, e = std::min(k, b + kEventBlock);
         survivor_range(in.hits, n, in.albedo, in.M, in.thr, in.u_rr || in.draw_rr, idx, k, out.thr, in.geo, in.normals,
                        in.D, surf, out.prim, b, e, in.records);
-        for (size_t j = b; j < e; ++j) {  // the path columns the survivors keep
-            const size_t i = size_t(idx[j]);
-            out.pid[j] = in.pid[i];
-            out.keys[j] = in.keys[i];
-            out.keys[k + j] = in.keys[n + i];
-            if (in.pick) out.pick[j] = in.pick[i];
-        }
+        take_path_columns(in.pid, in.keys, in.pick, n, idx, k, b, e, out.pid, out.keys, out.pick);
         if (in.draw_pick)  // uniform_pick's first uniform of the survivors' own keys
             for_words(out.keys, k, in.draw_ka, in.draw_kb, b, e,
                       [&](size_t j0, size_t m, const uint32_t* w, const uint32_t*) {

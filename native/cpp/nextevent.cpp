@@ -66,10 +66,19 @@ size_t event_block(LightChoice L, VertexPoints p, const NextEventOut& out, size_
                 if (c.entries[j] == env_entry) ec.u1[m_env] = unit24(wa[j]), ec.u2[m_env] = unit24(wb[j]), ++m_env;
             environment_sample_lanes(*L.env, ec.u1, ec.u2, m_env, ec.wi, ec.value, ec.pdf, kWordChunk);
         }
+        // the per-point loop reads copies: p and L reached pick_entries and draw_chunk by reference,
+        // and out, the outputs and counts are captured, so each byte store (contrib, the chunk's
+        // flags) had every field and pointer it reads loaded again from memory
+        const VertexPoints pv = p;
+        const LightChoice Lv = L;
+        const NextEventOut ov = out;
+        float* const vo = value_out;
+        uint8_t* const co = contrib;
+        size_t mc = m, badc = bad;
         for (size_t j = 0; j < cnt; ++j) {
             const size_t i = i0 + j;
             const float u1 = unit24(wa[j]), u2 = unit24(wb[j]);
-            const float P[3] = {p.P[i], p.P[n + i], p.P[2 * n + i]};
+            const float P[3] = {pv.P[i], pv.P[n + i], pv.P[2 * n + i]};
             float p_sel;
             size_t entry;
             bool lanes = false;
@@ -78,11 +87,11 @@ size_t event_block(LightChoice L, VertexPoints p, const NextEventOut& out, size_
                 entry = c.entries[j];
                 if constexpr (AREAS) lanes = c.is_drawn[j];
             } else {
-                entry = pick_entry(L, p, i, p_sel);
+                entry = pick_entry(Lv, pv, i, p_sel);
             }
             if (entry_out) entry_out[i] = int32_t(entry);
             float wi[3], dist, pdf, value[3], target[3];
-            const bool lamp = entry < L.num_lamps;
+            const bool lamp = entry < Lv.num_lamps;
             bool own = false;  // the point's own emissive triangle: it adds nothing
             if (lanes) {  // drawn and weighted already
                 if constexpr (AREAS) {
@@ -95,7 +104,7 @@ size_t event_block(LightChoice L, VertexPoints p, const NextEventOut& out, size_
                 }
                 pdf = 0.0f;  // (weighted with it)
             } else if (lamp) {
-                const LampSample s = sample_lamp(L.lamps[entry], P, u1, u2);
+                const LampSample s = sample_lamp(Lv.lamps[entry], P, u1, u2);
                 std::memcpy(wi, s.wi, sizeof wi);
                 std::memcpy(value, s.value, sizeof value);
                 dist = s.dist;
@@ -106,24 +115,24 @@ size_t event_block(LightChoice L, VertexPoints p, const NextEventOut& out, size_
                         wi[a] = ec.wi[a * kWordChunk + q], value[a] = ec.value[a * kWordChunk + q];
                     pdf = ec.pdf[q++];
                 } else {
-                    environment_sample(*L.env, u1, u2, wi, value, pdf);
+                    environment_sample(*Lv.env, u1, u2, wi, value, pdf);
                 }
                 dist = lampmath::INF;
             } else {
-                const size_t w = entry - L.num_lamps;
-                own = L.tri_prim && p.prim && L.tri_prim[w] == p.prim[i];
-                triangle_light(L.tri_geo, L.tri_area, T, w, P, u1, u2, wi, dist, pdf, target);
+                const size_t w = entry - Lv.num_lamps;
+                own = Lv.tri_prim && pv.prim && Lv.tri_prim[w] == pv.prim[i];
+                triangle_light(Lv.tri_geo, Lv.tri_area, T, w, P, u1, u2, wi, dist, pdf, target);
                 if (point_out)
                     for (int a = 0; a < 3; ++a) point_out[size_t(a) * n + i] = target[a];
                 const float scale = pdf > 0 ? 1.0f / pdf : 0.0f;
-                for (int a = 0; a < 3; ++a) value[a] = L.tri_emission[size_t(a) * T + w] * scale;
+                for (int a = 0; a < 3; ++a) value[a] = Lv.tri_emission[size_t(a) * T + w] * scale;
             }
-            if (L.no_mis[entry]) pdf = lampmath::INF;
+            if (Lv.no_mis[entry]) pdf = lampmath::INF;
             float ns[3], ng[3], thr[3];
             for (int a = 0; a < 3; ++a) {
-                ns[a] = p.ns[size_t(a) * n + i];
-                ng[a] = p.ng ? p.ng[size_t(a) * n + i] : ns[a];
-                if (p.thr) thr[a] = p.thr[size_t(a) * n + i];
+                ns[a] = pv.ns[size_t(a) * n + i];
+                ng[a] = pv.ng ? pv.ng[size_t(a) * n + i] : ns[a];
+                if (pv.thr) thr[a] = pv.thr[size_t(a) * n + i];
             }
             // In front of the shading normal is enough: a sample below the geometric one is
             // the shadow ray's to decide (it leaves through its own, skipped, triangle), as in
@@ -131,7 +140,7 @@ size_t event_block(LightChoice L, VertexPoints p, const NextEventOut& out, size_
             bool weighed = false;  // by draw_chunk already
             if constexpr (AREAS) weighed = c.drawn[j].ok;
             bool ok = p_sel > 0.0f &&
-                      (lanes ? weighed : nee_scale(ns, nullptr, wi, pdf, p_sel, p.thr ? thr : nullptr, value));
+                      (lanes ? weighed : nee_scale(ns, nullptr, wi, pdf, p_sel, pv.thr ? thr : nullptr, value));
             if (!(p_sel > 0.0f) || own) value[0] = value[1] = value[2] = 0.0f;  // (a tree pick below float's range)
             ok = ok && !own;
             if (bump) {  // a normal-mapped point: Cycles' bump shadowing of the sample
@@ -141,7 +150,7 @@ size_t event_block(LightChoice L, VertexPoints p, const NextEventOut& out, size_
                 ok = ok && g > 0.0f;
             }
             if (rough) rough_diffuse_scale(rough, n, i, ns, wi, value);
-            if (light_set && p.receivers && !((p.receivers[i] >> light_set[entry]) & 1u)) {
+            if (light_set && pv.receivers && !((pv.receivers[i] >> light_set[entry]) & 1u)) {
                 ok = false;  // light linking: the light does not reach this point's object
                 value[0] = value[1] = value[2] = 0.0f;
             }
@@ -149,7 +158,7 @@ size_t event_block(LightChoice L, VertexPoints p, const NextEventOut& out, size_
             size_t tri = 0;
             float cutoff = 0.0f;
             if (term) {
-                tri = index_at(p.prim, i, term->M);
+                tri = index_at(pv.prim, i, term->M);
                 cutoff = term->cutoff ? term->cutoff[tri] : 0.0f;
                 const float f = term->freq ? term->freq[tri] : 1.0f;
                 if (f > 1.0f && NL > 0) {
@@ -158,20 +167,20 @@ size_t event_block(LightChoice L, VertexPoints p, const NextEventOut& out, size_
                     ok = ok && s > 0;
                 }
             }
-            if (!p.skip_work) {  // every sample is traced; one that cannot contribute adds 0
+            if (!pv.skip_work) {  // every sample is traced; one that cannot contribute adds 0
                 if (!ok) value[0] = value[1] = value[2] = 0.0f;
                 ok = true;
             }
-            for (int a = 0; a < 3; ++a) value_out[size_t(a) * n + i] = value[a];
+            for (int a = 0; a < 3; ++a) vo[size_t(a) * n + i] = value[a];
             bool adds = ok;
             if (!ok) {
-                ++bad;
-            } else if (L.shadow[entry]) {
-                float O[3] = {p.P_off[i], p.P_off[n + i], p.P_off[2 * n + i]};
-                const bool geometry = !lamp && entry < L.num_lamps + T;  // a triangle: aim at its point
+                ++badc;
+            } else if (Lv.shadow[entry]) {
+                float O[3] = {pv.P_off[i], pv.P_off[n + i], pv.P_off[2 * n + i]};
+                const bool geometry = !lamp && entry < Lv.num_lamps + T;  // a triangle: aim at its point
                 const float* aim = geometry ? target : nullptr;
-                float shorten = p.shorten, lamp_point[3];
-                int32_t skip = p.prim ? p.prim[i] : -1;
+                float shorten = pv.shorten, lamp_point[3];
+                int32_t skip = pv.prim ? pv.prim[i] : -1;
                 const float ngw = ng[0] * wi[0] + ng[1] * wi[1] + ng[2] * wi[2];
                 // Cycles' shadow_ray_offset: the geometric normal on the side of L (by ns)
                 const float sign = NL < 0 ? -1.0f : 1.0f;
@@ -194,16 +203,18 @@ size_t event_block(LightChoice L, VertexPoints p, const NextEventOut& out, size_
                     for (int a = 0; a < 3; ++a) O[a] = P[a] + (P[a] - O[a]);
                 }
                 // a zero-length ray (the point lies on the light) is not traced and adds nothing
-                adds = shadow_record(O, wi, dist, aim, shorten, out.rays[m]);
-                out.rays[m].id = uint32_t(m);  // its place if its block's rays stay (event_blocks)
+                adds = shadow_record(O, wi, dist, aim, shorten, ov.rays[mc]);
+                ov.rays[mc].id = uint32_t(mc);  // its place if its block's rays stay (event_blocks)
                 if (adds) {
-                    out.send[m] = int64_t(i);
-                    if (out.skip) out.skip[m] = skip;
-                    ++m;
+                    ov.send[mc] = int64_t(i);
+                    if (ov.skip) ov.skip[mc] = skip;
+                    ++mc;
                 }
             }
-            contrib[i] = adds;
+            co[i] = adds;
         }
+        m = mc;
+        bad = badc;
     });
     *skipped = bad;
     return m - b;

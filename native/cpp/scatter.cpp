@@ -45,19 +45,18 @@ void scatter_range(const uint32_t* keys, size_t n, uint32_t ka, uint32_t kb, con
         scatter_lanes(wa, wb, m, ns + i0, ns + n + i0, ns + 2 * n + i0, ng ? ng + i0 : nullptr,
                       ng ? ng + n + i0 : nullptr, ng ? ng + 2 * n + i0 : nullptr, wi + i0, wi + n + i0,
                       wi + 2 * n + i0, pdf + i0, ok + i0);
-        if (!offset && !rays) return;
-        for (size_t i = i0; i < i0 + m; ++i) {
-            if (offset && ok[i]) {
-                const float f = offset->freq[index_at(offset->prim, i, offset->M)];
-                const float c = ns[i] * wi[i] + ns[n + i] * wi[n + i] + ns[2 * n + i] * wi[2 * n + i];
-                if (f > 1.0f) {
-                    const float s = c > 0 ? shift_cos_in(c, f) : 0.0f;
-                    for (int a = 0; a < 3; ++a) offset->thr[size_t(a) * n + i] *= s;
+        if (offset)
+            for (size_t i = i0; i < i0 + m; ++i)
+                if (ok[i]) {
+                    const float f = offset->freq[index_at(offset->prim, i, offset->M)];
+                    const float c = ns[i] * wi[i] + ns[n + i] * wi[n + i] + ns[2 * n + i] * wi[2 * n + i];
+                    if (f > 1.0f) {
+                        const float s = c > 0 ? shift_cos_in(c, f) : 0.0f;
+                        for (int a = 0; a < 3; ++a) offset->thr[size_t(a) * n + i] *= s;
+                    }
                 }
-            }
-            if (rays)  // the bounce rays' records, ready for the tracer
-                ray_record(O, wi, n, i, std::numeric_limits<float>::infinity(), rays[i]);
-        }
+        if (rays)  // the bounce rays' records, ready for the tracer
+            ray_records(O, wi, n, i0, i0 + m, std::numeric_limits<float>::infinity(), rays);
     });
 }
 

@@ -545,6 +545,26 @@ def test_cosine_scatter_packs_the_bounce_rays():
         shading.cosine_scatter(keys, 3, 4, ns, origins=O[:, :10])
 
 
+@pytest.mark.parametrize("n", [1, 5000, 2 * 2 ** 15 + 77])
+def test_cosine_scatter_records_with_a_shading_offset(n):
+    """The bounce rays' records and the offset's throughputs written in one pass, on one thread
+    and past the pass's two-thread split (from 2^15 paths), with a last chunk of the word loop
+    cut short: the same records as packing (origins, wi) and the same throughputs as without
+    records."""
+    rng = np.random.default_rng(27 + n)
+    keys = rng.integers(0, 2 ** 32, (2, n), dtype=np.uint64).astype(np.uint32)
+    ns, ng, O = _unit(rng, n), _unit(rng, n), rng.normal(size=(3, n)).astype(F32)
+    freq = np.array([1.0, 1.25, 2.0], F32)
+    prim = rng.integers(0, 3, n).astype(np.int32)
+    thr = rng.random((3, n)).astype(F32)
+    thr2 = thr.copy()
+    wi, pdf, ok = shading.cosine_scatter(keys, 5, 9, ns, ng, shading_offset=(freq, prim, thr))
+    wi2, pdf2, ok2, rays = shading.cosine_scatter(keys, 5, 9, ns, ng, origins=O, shading_offset=(freq, prim, thr2))
+    for a, b in ((wi2, wi), (pdf2, pdf), (ok2, ok), (thr2, thr)):
+        assert a.tobytes() == b.tobytes()
+    assert rays.tobytes() == shading.pack_rays(O, wi, np.full(n, np.inf, F32)).tobytes()
+
+
 def test_cosine_scatter_shading_offset_scales_throughput():
     """Cycles' shading offset on BSDF rays (closure/bsdf.h shift_cos_in), in the scatter pass:
     kept directions leaving a triangle with freq > 1 have thr scaled by cos(acos(c) f) / c
