@@ -58,7 +58,10 @@ class PointLight(Lamp):
         energy = luminance(self.emit) * (1.0 if self.delta else np.pi * self.radius ** 2)
         if self.ies is not None:        # the profile's mean over the sphere (the pick stays unbiased)
             energy *= ies_mean(self.ies)
-        return Bounds(self.center - r, self.center + r, np.array([0.0, 0.0, 1.0], F32), -1.0, 0.0, energy,
+        # cos_e -1: the same intensity every way (the tree's smallest importance counts it; an
+        # IES profile may be 0 some way: 0, as any other light of every direction)
+        iso = -1.0 if self.ies is None else 0.0
+        return Bounds(self.center - r, self.center + r, np.array([0.0, 0.0, 1.0], F32), -1.0, iso, energy,
                       own_sphere(self.center, r))
 
     def record(self):
@@ -195,8 +198,8 @@ class SpotLight(PointLight):
         # cull inside a node's sphere), widened by a margin so rounding never culls a lit point
         b = super().bounds()
         half = float(np.arccos(np.clip(float(self.cos_half), -1.0, 1.0)))
-        if half >= np.pi / 2 - 1e-3:
-            return b                                       # a hemisphere or more: every direction
+        if half >= np.pi / 2 - 1e-3:                   # a hemisphere or more: every direction
+            return Bounds(b.lo, b.hi, b.axis, -1.0, 0.0, b.energy, b.radius)
         m3 = np.linalg.inv(self.inv_m3.astype(np.float64))
         axis = m3 @ np.array([0.0, 0.0, -1.0])
         axis /= np.linalg.norm(axis)
@@ -207,7 +210,7 @@ class SpotLight(PointLight):
         edge /= np.linalg.norm(edge, axis=0)
         widest = float(np.arccos(np.clip(axis @ edge, -1.0, 1.0)).max()) + 1e-3
         if widest >= np.pi / 2:
-            return b
+            return Bounds(b.lo, b.hi, b.axis, -1.0, 0.0, b.energy, b.radius)
         return Bounds(b.lo, b.hi, axis.astype(F32), float(np.cos(widest)), 1.0, b.energy, b.radius)
 
     def _cone_fields(self) -> dict:

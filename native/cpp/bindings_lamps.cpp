@@ -190,14 +190,16 @@ py::array_t<double> tree_pdf_py(const LightTree& t, F32Array P, I64Array key, py
     return prob;
 }
 
-// Every stop's lane weighs at one point (LightTree::stop_weighs): (lanes, exact), each (stops, 8).
-py::tuple tree_stop_weighs_py(const LightTree& t, F32Array P, py::object N) {
+// Every stop's lane weighs at one point (LightTree::stop_weighs): (lanes, exact), each (stops, 8);
+// smallest: (lanes, exact) of the smallest importances instead.
+py::tuple tree_stop_weighs_py(const LightTree& t, F32Array P, py::object N, bool smallest) {
     if (P.ndim() != 1 || P.shape(0) != 3) throw py::value_error("P must have shape (3,), got " + shape_str(P));
     F32Array normal_keep;
     const float* nv = optional_f32(N, 0, 3, "N", normal_keep);
     py::array_t<double> lanes({t.stops(), size_t(8)}), exact({t.stops(), size_t(8)});
-    t.stop_weighs(P.data(), nv, lanes.mutable_data(), exact.mutable_data());
-    return py::make_tuple(lanes, exact);
+    py::array_t<double> lmin({t.stops(), size_t(8)}), emin({t.stops(), size_t(8)});
+    t.stop_weighs(P.data(), nv, lanes.mutable_data(), exact.mutable_data(), lmin.mutable_data(), emin.mutable_data());
+    return smallest ? py::make_tuple(lmin, emin) : py::make_tuple(lanes, exact);
 }
 
 std::shared_ptr<LightTree> make_tree(F32Array lo, F32Array hi, F32Array axis, F32Array cos_o, F32Array cos_e,
@@ -969,7 +971,8 @@ void register_lamps(py::module_& m) {
              py::arg("receivers") = py::none(), py::arg("rows") = false)
         .def("pdf", &tree_pdf_py, py::arg("P"), py::arg("key"), py::arg("N") = py::none(),
              py::arg("receivers") = py::none())
-        .def("stop_weighs", &tree_stop_weighs_py, py::arg("P"), py::arg("N") = py::none());
+        .def("stop_weighs", &tree_stop_weighs_py, py::arg("P"), py::arg("N") = py::none(),
+             py::arg("smallest") = false);
     m.def("next_event", &next_event_py, py::arg("records"), py::arg("cdf"), py::arg("prob"), py::arg("no_mis"),
           py::arg("shadow"), py::arg("tri_geo"), py::arg("tri_area"), py::arg("tri_emission"), py::arg("env"), py::arg("P"),
           py::arg("P_off"), py::arg("ns"), py::arg("ng"), py::arg("thr"), py::arg("keys"), py::arg("ka"), py::arg("kb"),

@@ -71,8 +71,13 @@ Cone merge(const Cone& a, const Cone& b) {
 
 // The importance of node nd's own bounds at P (see lighttree.h): energy x f / d2, f the
 // incidence and emission cosines. N (null: none) is the receiving point's unit normal: lights
-// wholly below its horizon count 0.
-double weigh(const LightTreeNode& nd, const float P[3], const float* N) {
+// wholly below its horizon count 0. wmin: the smallest importance (Cycles' min_importance), the
+// cosines at their worst over the node's sphere and cone (cos(theta_i + theta_u), and
+// cos(theta + theta_u + theta_s) where that stays within theta_b, LightTreeNode::cos_b; a node of
+// lights that emit every way alike: cos_u, as Cycles orients a point light toward P), 0 inside
+// the sphere and wherever the largest is 0.
+double weigh(const LightTreeNode& nd, const float P[3], const float* N, double& wmin) {
+    wmin = 0.0;
     const double v[3] = {double(nd.center[0]) - P[0], double(nd.center[1]) - P[1], double(nd.center[2]) - P[2]};
     const double dd = dot3(v, v), r = nd.radius, r2 = r * r;
     if (N) {  // the box wholly below the tangent plane at P (its highest corner on or under it)
@@ -89,49 +94,74 @@ double weigh(const LightTreeNode& nd, const float P[3], const float* N) {
     // within the bounds (or NaN): no cone culling, and the distance to the centre at least half
     // the radius (Cycles)
     if (!(dd > r2)) return nd.energy / std::max(std::max(dd, 0.25 * r2), kMinDist2);
-    double f = 1.0;
+    double f = 1.0, fmin = 1.0;
     const double d = std::sqrt(dd);
     const double sin_u = r / d, cos_u = std::sqrt(std::max(0.0, 1.0 - sin_u * sin_u));
     if (N) {  // the smallest angle of incidence any light of the node can have: theta_i - theta_u
         const double n[3] = {N[0], N[1], N[2]};
         const double cos_i = std::clamp(dot3(n, v) / d, -1.0, 1.0);
+        const double sin_i = std::sqrt(std::max(0.0, 1.0 - cos_i * cos_i));
         if (cos_i < cos_u) {
-            const double sin_i = std::sqrt(std::max(0.0, 1.0 - cos_i * cos_i));
             const double c = cos_i * cos_u + sin_i * sin_u;  // cos(theta_i - theta_u)
             if (!(c > 0.0)) return 0.0;
             f = c;
         }
+        fmin = std::max(cos_i * cos_u - sin_i * sin_u, 0.0);  // cos(theta_i + theta_u)
     }
+    const double ax[3] = {nd.axis[0], nd.axis[1], nd.axis[2]};
+    const double cos_t = std::clamp(-dot3(ax, v) / d, -1.0, 1.0);  // axis vs. node -> P
+    const double sin_t = std::sqrt(std::max(0.0, 1.0 - cos_t * cos_t));
     if (nd.cos_o > -1.0f) {
         // phi = theta_o + theta_u: the widest angle from the axis at which a light of the node
         // can be seen from P's direction
         const double cos_p = nd.cos_o * cos_u - nd.sin_o * sin_u, sin_p = nd.sin_o * cos_u + nd.cos_o * sin_u;
-        const double ax[3] = {nd.axis[0], nd.axis[1], nd.axis[2]};
-        const double cos_t = std::clamp(-dot3(ax, v) / d, -1.0, 1.0);  // axis vs. node -> P
         if (sin_p >= 0.0 && cos_t < cos_p) {                           // phi <= pi and theta > phi
-            const double sin_t = std::sqrt(std::max(0.0, 1.0 - cos_t * cos_t));
             const double cos_r = cos_t * cos_p + sin_t * sin_p;        // cos(theta - phi)
             if (cos_r <= nd.cos_e) return 0.0;
             f *= cos_r;
         }
     }
-    return nd.energy * f / std::max(dd, kMinDist2);
+    const double inv = 1.0 / std::max(dd, kMinDist2);
+    if (nd.cos_b < -1.0f) {
+        fmin *= cos_u;
+    } else {  // cos(theta + theta_u + theta_s), within theta_b
+        const double c1 = cos_t * cos_u - sin_t * sin_u, s1 = sin_t * cos_u + cos_t * sin_u;
+        const double cw = c1 * nd.cos_s - s1 * nd.sin_s;
+        fmin *= cos_t >= 0.0 && cw >= nd.cos_b ? cw : 0.0;
+    }
+    wmin = nd.energy * fmin * inv;
+    return nd.energy * f * inv;
 }
 
 // The halves of stop q's lanes that bad names (bit 0: lanes 0-3, bit 1: lanes 4-7: a distance
 // out of float's range) weighed in float64 into imp.
 void exact_halves(const LightTreeNode* nodes, const LightTree::Stop& q, int bad, const float P[3], const float* N,
-                  double imp[8]) {
+                  double imp[8], double imin[8]) {
     for (int o = 0; o < 8; o += 4)
         if (bad & (1 << (o / 4)))
-            for (int k = o; k < o + 4; ++k) imp[k] = q.node[k] < 0 ? 0.0 : weigh(nodes[q.node[k]], P, N);
+            for (int k = o; k < o + 4; ++k) {
+                imin[k] = 0.0;
+                imp[k] = q.node[k] < 0 ? 0.0 : weigh(nodes[q.node[k]], P, N, imin[k]);
+            }
 }
 
 // The eight lanes of stop q weighed at the point: side by side in float (treelanes.h), the four
 // of them a distance out of float's range takes in float64.
-void lane_weighs(const LightTreeNode* nodes, const LightTree::Stop& q, const TreePoint& at, double imp[8]) {
+void lane_weighs(const LightTreeNode* nodes, const LightTree::Stop& q, const TreePoint& at, double imp[8],
+                 double imin[8]) {
     static const StopWeighFn weigh_lanes = stop_weigh_fn();
-    exact_halves(nodes, q, weigh_lanes(q, at, imp), at.P, at.N, imp);
+    exact_halves(nodes, q, weigh_lanes(q, at, imp, imin), at.P, at.N, imp, imin);
+}
+
+// The targets' shares where their largest importances t sum to s > 0 (finite), as Cycles'
+// get_left_probability splits a node: the mean of the shares by the largest and by the smallest
+// importances tm (sm their sum), or where the smallest sum to 0 (or overflow) the mean with an
+// even share among the targets whose largest is > 0 (n of them, inv_n = 1 / n). A light that may
+// give nothing beside a brighter one that may give nothing too still gets about half the samples
+// (fuzz seed 10, README). The same operations, in order, as pick_rows' lanes.
+inline __attribute__((always_inline)) double share(double t, double tm, double inv, double inv_m, bool ok_m,
+                                                   double inv_n) {
+    return 0.5 * (t * inv + (ok_m ? tm * inv_m : (t > 0.0 ? inv_n : 0.0)));
 }
 
 // The probabilities at P of a walk at stop q going on to each of its targets (see
@@ -146,9 +176,12 @@ void lane_weighs(const LightTreeNode* nodes, const LightTree::Stop& q, const Tre
 // 1e-19 would round to 0 that way, and a delta light must never become impossible. At least one
 // target gets > 0.
 inline __attribute__((always_inline)) void probs_of(const LightTreeNode* nodes, const LightTree::Stop& q, const uint64_t* lane_sets, uint64_t receivers,
-              double imp[8], double p[4]) {
+              double imp[8], double imin[8], double p[4]) {
     if (lane_sets)
-        for (int k = 0; k < 8; ++k) imp[k] = (lane_sets[k] & receivers) ? imp[k] : 0.0;
+        for (int k = 0; k < 8; ++k) {
+            imp[k] = (lane_sets[k] & receivers) ? imp[k] : 0.0;
+            imin[k] = (lane_sets[k] & receivers) ? imin[k] : 0.0;
+        }
     bool eligible[4], any = false;
     for (int j = 0; j < 4; ++j) {
         eligible[j] = q.target[j] >= 0 && (!lane_sets || (lane_sets[8 + j] & receivers));
@@ -156,14 +189,18 @@ inline __attribute__((always_inline)) void probs_of(const LightTreeNode* nodes, 
     }
     if (!any)
         for (int j = 0; j < 4; ++j) eligible[j] = q.target[j] >= 0;
-    double t[4], s = 0.0;
+    double t[4], tm[4], s = 0.0, sm = 0.0, n = 0.0;
     for (int j = 0; j < 4; ++j) {
         t[j] = eligible[j] ? imp[2 * j] + imp[2 * j + 1] : 0.0;
+        tm[j] = eligible[j] ? imin[2 * j] + imin[2 * j + 1] : 0.0;
         s += t[j];
+        sm += tm[j];
+        n += t[j] > 0.0 ? 1.0 : 0.0;
     }
     if (s > 0.0 && std::isfinite(s)) {
-        const double inv = 1.0 / s;
-        for (int j = 0; j < 4; ++j) p[j] = t[j] * inv;
+        const double inv = 1.0 / s, inv_m = 1.0 / sm, inv_n = 1.0 / n;
+        const bool ok_m = sm > 0.0 && std::isfinite(sm);
+        for (int j = 0; j < 4; ++j) p[j] = share(t[j], tm[j], inv, inv_m, ok_m, inv_n);
         return;
     }
     double e = 0.0;
@@ -175,9 +212,9 @@ inline __attribute__((always_inline)) void probs_of(const LightTreeNode* nodes, 
 // probs_of at P, its lanes weighed there.
 void target_probs(const LightTreeNode* nodes, const LightTree::Stop& q, const uint64_t* lane_sets, const TreePoint& at,
                   uint64_t receivers, double p[4]) {
-    double imp[8];
-    lane_weighs(nodes, q, at, imp);
-    probs_of(nodes, q, lane_sets, receivers, imp, p);
+    double imp[8], imin[8];
+    lane_weighs(nodes, q, at, imp, imin);
+    probs_of(nodes, q, lane_sets, receivers, imp, imin, p);
 }
 
 // Conty and Kulla's orientation measure of a cone: the solid angle of its axis spread plus the
@@ -197,7 +234,24 @@ struct Item {
     uint64_t sets;  // light linking: its members' light sets (bit s)
     double radius;  // one member's own bounding sphere about the box centre (LightTreeInput::radius;
                     // infinite: the box's)
+    int reach;      // what its smallest importance may count on (Reach::kind)
 };
+
+// Where every light of a node surely emits, for its smallest importance (LightTreeNode::cos_b):
+// kind 0 nowhere (a light may give nothing anywhere: two-sided emitters, IES profiles, cones
+// of every direction), 1 every way alike (point lamps), 2 within theta_b - theta_s of the
+// node's axis (each light within theta_b of its own axis, those within theta_s of the node's).
+struct Reach {
+    int kind;
+    double s, b;
+};
+
+// A member's Reach kind: a cone of every direction with cos_e -1 is a light of the same
+// intensity every way (LightTreeInput::cos_e); a narrower cone reaches within theta_o + theta_e.
+int member_reach(const LightTreeInput& in, size_t i) {
+    if (in.cos_o[i] <= -1.0f) return in.cos_e[i] <= -1.0f ? 1 : 0;
+    return 2;
+}
 
 Cone member_cone(const LightTreeInput& in, size_t i) {
     Cone cone{};
@@ -284,19 +338,39 @@ struct Builder {
         return size_t(first_right - order.begin());
     }
 
+    // A node's reach from its children's (cones lc, rc and their reaches) about its cone's axis:
+    // each child's axis spread widened by the angle between its axis and the node's (a bound),
+    // the narrowest theta_b; lights alike every way add no condition.
+    static Reach merge_reach(const Cone& cone, const Cone& lc, const Reach& lr, const Cone& rc, const Reach& rr) {
+        if (lr.kind == 0 || rr.kind == 0) return {0, 0.0, 0.0};
+        if (lr.kind == 1 && rr.kind == 1) return {1, 0.0, 0.0};
+        Reach r{2, 0.0, kPi};
+        const Cone* cs[2] = {&lc, &rc};
+        const Reach* rs[2] = {&lr, &rr};
+        for (int c = 0; c < 2; ++c) {
+            if (rs[c]->kind != 2) continue;
+            const double off = std::acos(std::clamp(dot3(cone.axis, cs[c]->axis), -1.0, 1.0)) + 1e-6;
+            r.s = std::max(r.s, rs[c]->s + off);
+            r.b = std::min(r.b, rs[c]->b);
+        }
+        if (!(r.s < r.b)) r.kind = 0;
+        return r;
+    }
+
     int bin_of(int32_t i, int k, double lo, double extent, int bins) const {
         const int c = int((centroid(i, k) - lo) / extent * bins);
         return std::clamp(c, 0, bins - 1);
     }
 
-    // Fills node `at` over items order[b, e); returns its box (lo, hi) and cone.
-    void build(size_t at, size_t b, size_t e, double lo[3], double hi[3], Cone& cone) {
+    // Fills node `at` over items order[b, e); returns its box (lo, hi), cone and reach.
+    void build(size_t at, size_t b, size_t e, double lo[3], double hi[3], Cone& cone, Reach& reach) {
         double own_radius = INFINITY;
         if (e - b == 1) {
             const int32_t i = order[b];
             const Item& it = items[size_t(i)];
             for (int k = 0; k < 3; ++k) lo[k] = it.lo[k], hi[k] = it.hi[k];
             cone = it.cone;
+            reach = {it.cone.theta_o >= kPi && it.reach == 2 ? 0 : it.reach, 0.0, it.cone.theta_o + it.cone.theta_e};
             own_radius = it.radius;
             nodes[at].energy = it.energy;
             nodes[at].child = -1 - i;
@@ -327,10 +401,12 @@ struct Builder {
             nodes.resize(child + 2);
             double llo[3], lhi[3], rlo[3], rhi[3];
             Cone lc, rc;
-            build(child, b, mid, llo, lhi, lc);
-            build(child + 1, mid, e, rlo, rhi, rc);
+            Reach lr, rr;
+            build(child, b, mid, llo, lhi, lc, lr);
+            build(child + 1, mid, e, rlo, rhi, rc, rr);
             for (int k = 0; k < 3; ++k) lo[k] = std::min(llo[k], rlo[k]), hi[k] = std::max(lhi[k], rhi[k]);
             cone = merge(lc, rc);
+            reach = merge_reach(cone, lc, lr, rc, rr);
             nodes[at].energy = nodes[child].energy + nodes[child + 1].energy;
             nodes[at].child = int32_t(child);
         }
@@ -353,6 +429,10 @@ struct Builder {
         nd.cos_o = all ? -1.0f : float(std::cos(cone.theta_o));
         nd.sin_o = all ? 0.0f : float(std::sin(cone.theta_o));
         nd.cos_e = float(std::cos(std::min(cone.theta_e, kPi / 2)));
+        // (theta_b at most pi/2: the worst emission cosine counted is never below 0)
+        nd.cos_b = reach.kind == 0 ? 2.0f : reach.kind == 1 ? -2.0f : float(std::cos(std::min(reach.b, kPi / 2)));
+        nd.cos_s = reach.kind == 2 ? float(std::cos(reach.s)) : 1.0f;
+        nd.sin_s = reach.kind == 2 ? float(std::sin(reach.s)) : 0.0f;
         // every direction the node's lights emit in lies within pi/2 of the axis: a point behind
         // the box's extent along the (stored) axis gets nothing (weigh)
         nd.slab = -1.0f;
@@ -411,10 +491,13 @@ LightTree::LightTree(const LightTreeInput& in) {
             for (int k = 0; k < 3; ++k) it.lo[k] = INFINITY, it.hi[k] = -INFINITY;
             it.cone = member_cone(in, i);
             it.radius = in.radius ? double(in.radius[i]) : INFINITY;
+            it.reach = member_reach(in, i);
             items.push_back(it);
         } else {
             items.back().cone = merge(items.back().cone, member_cone(in, i));
             items.back().radius = INFINITY;     // a group: its box's sphere
+            // (a group of lights alike every way stays so; any other is counted on nowhere)
+            items.back().reach = items.back().reach == 1 && member_reach(in, i) == 1 ? 1 : 0;
         }
         Item& it = items.back();
         it.sets |= uint64_t(1) << (in.set ? in.set[i] : 0);
@@ -449,7 +532,8 @@ LightTree::LightTree(const LightTreeInput& in) {
     std::iota(bld.order.begin(), bld.order.end(), 0);
     double lo[3], hi[3];
     Cone cone;
-    bld.build(0, 0, items.size(), lo, hi, cone);
+    Reach reach;
+    bld.build(0, 0, items.size(), lo, hi, cone, reach);
     for (size_t g = 0; g < items.size(); ++g)
         for (int32_t j = item_start_[g]; j < item_start_[g + 1]; ++j)
             leaf_of_key_[size_t(member_key_[size_t(j)])] = leaf_of_item[g];
@@ -509,6 +593,9 @@ void LightTree::build_stops() {
             q.sin_o[k] = nd.sin_o;
             q.cos_e[k] = nd.cos_e;
             q.slab[k] = nd.slab;
+            q.cos_b[k] = nd.cos_b;
+            q.cos_s[k] = nd.cos_s;
+            q.sin_s[k] = nd.sin_s;
             q.energy[k] = q.node[k] < 0 ? 0.0 : nd.energy;
         }
         stops_.push_back(q);
@@ -618,8 +705,8 @@ struct LightTree::Rows {
     size_t base;                // the first point's index in sample_rows' arrays
     Walks walks[2];             // a stop at depth d reads walks[d % 2], regroups into the other
     uint8_t pick[kRows];
-    double t[4][kRows];  // each target's summed importance
-    float g[8][kRows + kPad];
+    double t[4][kRows], tm[4][kRows];  // each target's summed importance, largest and smallest
+    float g[8][kRows + kPad], gmin[8][kRows + kPad];
     int32_t ok[8][kRows + kPad];
     int32_t fours[2][kRows];  // per walk: lanes 0-3's, 4-7's ok ANDed (-1: in float's range)
 };
@@ -639,25 +726,32 @@ typedef int64_t L4 __attribute__((vector_size(32)));
 // Copies per instruction set (as treelanes.cpp), chosen by lane_copy so that DACRT_ISA can pick
 // a narrower one and the per-ISA test compares them.
 using TargetRows = const double (*)[LightTree::Rows::kRows];
-using PickRowsFn = void (*)(TargetRows t, const double pe[4], const double* u, double* lo, double* w, size_t m,
-                            uint8_t* pick);
-inline __attribute__((always_inline)) void pick_rows(TargetRows t, const double pe[4], const double* u, double* lo,
-                                                     double* w, size_t m, uint8_t* pick) {
+using PickRowsFn = void (*)(TargetRows t, TargetRows tm, const double pe[4], const double* u, double* lo, double* w,
+                            size_t m, uint8_t* pick);
+inline __attribute__((always_inline)) void pick_rows(TargetRows t, TargetRows tm, const double pe[4], const double* u,
+                                                     double* lo, double* w, size_t m, uint8_t* pick) {
     size_t i = 0;
     for (; i + 4 <= m; i += 4) {
-        D4 tj[4], uv, lov, wv;
+        D4 tj[4], mj[4], uv, lov, wv;
         for (int j = 0; j < 4; ++j) std::memcpy(&tj[j], t[j] + i, sizeof(D4));
+        for (int j = 0; j < 4; ++j) std::memcpy(&mj[j], tm[j] + i, sizeof(D4));
         std::memcpy(&uv, u + i, sizeof(D4));
         std::memcpy(&lov, lo + i, sizeof(D4));
         std::memcpy(&wv, w + i, sizeof(D4));
-        D4 s = D4{} + 0.0;
-        for (int j = 0; j < 4; ++j) s += tj[j];
+        D4 s = D4{} + 0.0, sm = D4{} + 0.0, n = D4{} + 0.0;
+        for (int j = 0; j < 4; ++j) {
+            s += tj[j];
+            sm += mj[j];
+            n += tj[j] > 0.0 ? D4{} + 1.0 : D4{} + 0.0;
+        }
         const L4 ok = (s > 0.0) & (s < D4{} + INFINITY);  // s > 0 and finite
-        const D4 inv = 1.0 / s;
+        const L4 ok_m = (sm > 0.0) & (sm < D4{} + INFINITY);
+        const D4 inv = 1.0 / s, inv_m = 1.0 / sm, inv_n = 1.0 / n;
         D4 p[4], run[5];
         run[0] = lov;
-        for (int j = 0; j < 4; ++j) {
-            p[j] = ok ? tj[j] * inv : D4{} + pe[j];
+        for (int j = 0; j < 4; ++j) {  // share()'s operations
+            const D4 even = tj[j] > 0.0 ? inv_n : D4{} + 0.0;
+            p[j] = ok ? 0.5 * (tj[j] * inv + (ok_m ? mj[j] * inv_m : even)) : D4{} + pe[j];
             run[j + 1] = run[j] + wv * p[j];
         }
         L4 last = L4{}, first = L4{} + 4;
@@ -675,12 +769,16 @@ inline __attribute__((always_inline)) void pick_rows(TargetRows t, const double 
         for (int a = 0; a < 4; ++a) pick[i + size_t(a)] = uint8_t(k[a]);
     }
     for (; i < m; ++i) {  // the last 1-3 as probs_of and pick_of
-        double s = 0.0;
-        for (int j = 0; j < 4; ++j) s += t[j][i];
+        double s = 0.0, sm = 0.0, n = 0.0;
+        for (int j = 0; j < 4; ++j) {
+            s += t[j][i];
+            sm += tm[j][i];
+            n += t[j][i] > 0.0 ? 1.0 : 0.0;
+        }
         double p[4];
-        const bool ok = s > 0.0 && std::isfinite(s);
-        const double inv = 1.0 / s;
-        for (int j = 0; j < 4; ++j) p[j] = ok ? t[j][i] * inv : pe[j];
+        const bool ok = s > 0.0 && std::isfinite(s), ok_m = sm > 0.0 && std::isfinite(sm);
+        const double inv = 1.0 / s, inv_m = 1.0 / sm, inv_n = 1.0 / n;
+        for (int j = 0; j < 4; ++j) p[j] = ok ? share(t[j][i], tm[j][i], inv, inv_m, ok_m, inv_n) : pe[j];
         double run[5];
         run[0] = lo[i];
         for (int j = 0; j < 4; ++j) run[j + 1] = run[j] + w[i] * p[j];
@@ -699,9 +797,9 @@ inline __attribute__((always_inline)) void pick_rows(TargetRows t, const double 
 }
 
 #define DACRT_PICK_ISA(NAME, TARGET)                                                                       \
-    TARGET void NAME##_pick_rows(TargetRows t, const double pe[4], const double* u, double* lo, double* w, \
-                                 size_t m, uint8_t* pick) {                                                \
-        pick_rows(t, pe, u, lo, w, m, pick);                                                               \
+    TARGET void NAME##_pick_rows(TargetRows t, TargetRows tm, const double pe[4], const double* u, double* lo, \
+                                 double* w, size_t m, uint8_t* pick) {                                     \
+        pick_rows(t, tm, pe, u, lo, w, m, pick);                                                           \
     }
 DACRT_PICK_ISA(portable, )
 DACRT_PICK_ISA(avx2, __attribute__((target("avx2,fma,bmi,bmi2"))))
@@ -712,11 +810,13 @@ DACRT_PICK_ISA(avx512, __attribute__((target("avx2,fma,bmi,bmi2,avx512f,avx512vl
 // Point i's eight importances at stop q from its row weighs (an empty lane 0.0), and which of
 // its fours have a distance out of float's range (bit 0: lanes 0-3, bit 1: 4-7; an empty lane
 // repeats lane 0's bounds, so lane 0 decides for it: empty_hi, an empty lane among 4-7).
-inline int lane_imps(const LightTree::Stop& q, const LightTree::Rows& r, size_t i, bool empty_hi, double imp[8]) {
+inline int lane_imps(const LightTree::Stop& q, const LightTree::Rows& r, size_t i, bool empty_hi, double imp[8],
+                     double imin[8]) {
     int bad = empty_hi && !r.ok[0][i] ? 2 : 0;
     for (int k = 0; k < 8; ++k) {
         const bool lane = q.node[k] >= 0;
         imp[k] = lane ? q.energy[k] * double(r.g[k][i]) : 0.0;
+        imin[k] = lane ? q.energy[k] * double(r.gmin[k][i]) : 0.0;
         if (lane && !r.ok[k][i]) bad |= k < 4 ? 1 : 2;
     }
     return bad;
@@ -769,7 +869,7 @@ void LightTree::walk_rows(Rows& r, size_t depth, size_t at, size_t b, size_t e, 
     bool empty_hi = false;
     for (int k = 0; k < 8; ++k) {
         if (q.node[k] >= 0)
-            weigh_rows(q, k, rows, m, r.g[k], r.ok[k]);
+            weigh_rows(q, k, rows, m, r.g[k], r.gmin[k], r.ok[k]);
         else
             empty_hi |= k >= 4;
     }
@@ -777,14 +877,14 @@ void LightTree::walk_rows(Rows& r, size_t depth, size_t at, size_t b, size_t e, 
     if (sets && r.receivers) {  // light linking: a walk at a time, its lanes masked by its sets
         for (size_t i = 0; i < m; ++i) {
             const size_t at_i = b + i;
-            double imp[8];
+            double imp[8], imin[8];
             const float P[3] = {c.rows[0][at_i], c.rows[1][at_i], c.rows[2][at_i]},
                         N[3] = {c.rows[3][at_i], c.rows[4][at_i], c.rows[5][at_i]};
-            const int bad = lane_imps(q, r, i, empty_hi, imp);
-            if (bad) exact_halves(nodes_.data(), q, bad, P, r.normal ? N : nullptr, imp);
+            const int bad = lane_imps(q, r, i, empty_hi, imp, imin);
+            if (bad) exact_halves(nodes_.data(), q, bad, P, r.normal ? N : nullptr, imp, imin);
             const uint64_t rec = r.receivers[r.base + size_t(c.id[at_i])];
             double p[4];
-            probs_of(nodes_.data(), q, rec == kAllSets ? nullptr : sets, rec, imp, p);
+            probs_of(nodes_.data(), q, rec == kAllSets ? nullptr : sets, rec, imp, imin, p);
             r.pick[i] = uint8_t(pick_of(p, c.u[at_i], c.lo[at_i], c.w[at_i]));
         }
     } else {
@@ -793,16 +893,20 @@ void LightTree::walk_rows(Rows& r, size_t depth, size_t at, size_t b, size_t e, 
         // the pick), so that the walks overlap: the same operations per walk
         for (int j = 0; j < 4; ++j) {
             double* t = r.t[j];
+            double* tm = r.tm[j];
             const int a = 2 * j, cl = 2 * j + 1;
             if (q.target[j] < 0) {
                 std::fill(t, t + m, 0.0);
+                std::fill(tm, tm + m, 0.0);
                 continue;
             }
             const double ea = q.energy[a];
             for (size_t i = 0; i < m; ++i) t[i] = ea * double(r.g[a][i]);
+            for (size_t i = 0; i < m; ++i) tm[i] = ea * double(r.gmin[a][i]);
             if (q.node[cl] < 0) continue;  // (+ an empty lane's 0.0: t >= +0 or NaN, the same)
             const double ec = q.energy[cl];
             for (size_t i = 0; i < m; ++i) t[i] += ec * double(r.g[cl][i]);
+            for (size_t i = 0; i < m; ++i) tm[i] += ec * double(r.gmin[cl][i]);
         }
         // which fours left float's range at each walk: the filled lanes' ok rows ANDed per four
         // in vectors (an empty lane among 4-7 by lane 0's), rather than eight tests per walk
@@ -820,13 +924,16 @@ void LightTree::walk_rows(Rows& r, size_t depth, size_t at, size_t b, size_t e, 
         for (size_t i = 0; i < m; ++i) {
             if ((fours[0][i] & fours[1][i]) == -1) continue;
             const int bad = (fours[0][i] ? 0 : 1) | (fours[1][i] ? 0 : 2);
-            double imp[8];
-            lane_imps(q, r, i, empty_hi, imp);
+            double imp[8], imin[8];
+            lane_imps(q, r, i, empty_hi, imp, imin);
             const size_t at_i = b + i;
             const float P[3] = {c.rows[0][at_i], c.rows[1][at_i], c.rows[2][at_i]},
                         N[3] = {c.rows[3][at_i], c.rows[4][at_i], c.rows[5][at_i]};
-            exact_halves(nodes_.data(), q, bad, P, r.normal ? N : nullptr, imp);
-            for (int j = 0; j < 4; ++j) r.t[j][i] = q.target[j] >= 0 ? imp[2 * j] + imp[2 * j + 1] : 0.0;
+            exact_halves(nodes_.data(), q, bad, P, r.normal ? N : nullptr, imp, imin);
+            for (int j = 0; j < 4; ++j) {
+                r.t[j][i] = q.target[j] >= 0 ? imp[2 * j] + imp[2 * j + 1] : 0.0;
+                r.tm[j][i] = q.target[j] >= 0 ? imin[2 * j] + imin[2 * j + 1] : 0.0;
+            }
         }
         double pe[4];  // where all importances are 0 (or their sum is not finite): by energy
         {
@@ -836,7 +943,7 @@ void LightTree::walk_rows(Rows& r, size_t depth, size_t at, size_t b, size_t e, 
             for (int j = 0; j < 4; ++j) pe[j] = q.target[j] >= 0 ? nodes_[size_t(q.target[j])].energy * inv : 0.0;
         }
         static const PickRowsFn pick = lane_copy<PickRowsFn>(portable_pick_rows, avx2_pick_rows, avx512_pick_rows);
-        pick(r.t, pe, c.u + b, c.lo + b, c.w + b, m, r.pick);
+        pick(r.t, r.tm, pe, c.u + b, c.lo + b, c.w + b, m, r.pick);
     }
     // the walks regrouped by target into the other rows: counts and cursors kept in registers
     // and chosen by masks (a histogram in memory, ++count[pick] and tmp[fill[pick]++], chained
@@ -898,14 +1005,19 @@ void LightTree::sample_rows(size_t count, const float* P, const float* N, size_t
     }
 }
 
-void LightTree::stop_weighs(const float P[3], const float* N, double* lanes, double* exact) const {
+void LightTree::stop_weighs(const float P[3], const float* N, double* lanes, double* exact, double* lanes_min,
+                            double* exact_min) const {
     TreePoint point;
     tree_point(point, P, N);
     for (size_t s = 0; s < stops_.size(); ++s) {
-        lane_weighs(nodes_.data(), stops_[s], point, lanes + 8 * s);
+        double lmin[8];
+        lane_weighs(nodes_.data(), stops_[s], point, lanes + 8 * s, lmin);
         for (int k = 0; k < 8; ++k) {
             const int32_t at = stops_[s].node[k];
-            exact[8 * s + size_t(k)] = at < 0 ? 0.0 : weigh(nodes_[size_t(at)], P, N);
+            double emin = 0.0;
+            exact[8 * s + size_t(k)] = at < 0 ? 0.0 : weigh(nodes_[size_t(at)], P, N, emin);
+            if (lanes_min) lanes_min[8 * s + size_t(k)] = lmin[k];
+            if (exact_min) exact_min[8 * s + size_t(k)] = emin;
         }
     }
 }

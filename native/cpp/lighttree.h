@@ -49,6 +49,10 @@ struct LightTreeNode {
                               // front of planes normal to axis through it): the bounds' half
                               // extent along axis, so that a point with axis . (P - center) +
                               // slab <= 0 is behind every light (-1: no such half-space)
+    float cos_b, cos_s, sin_s;  // the smallest importance's cone: every light of the node emits
+                                // toward every direction within theta_b - theta_s of axis, its
+                                // own axis within theta_s of it (cos_b 2: no such direction, a
+                                // light may give nothing anywhere; -2: all emit every way alike)
     double energy;            // summed energy of the lights below (> 0; double: sums of float
                               // energies overflow float, and importances divide it by d^2)
     int32_t child;            // inner node: left child (right = child + 1); leaf: -1 - member
@@ -63,7 +67,7 @@ struct LightTreeInput {
     const float* hi;
     const float* axis;
     const float* cos_o;
-    const float* cos_e;
+    const float* cos_e;  // (with cos_o = -1: -1 the same intensity every way, e.g. a point lamp)
     const double* energy;
     const int32_t* key;
     size_t m;
@@ -112,9 +116,11 @@ public:
     double pdf(const float P[3], const float* N, int64_t key, uint64_t receivers = kAllSets) const;
     // For tests: every stop's eight lanes (stops() x 8, stop by stop) weighed at P (and N) as a
     // walk weighs them (the float lanes, float64 where they leave float's range) into lanes,
-    // and by the float64 weigh() into exact (0 for an empty lane).
+    // and by the float64 weigh() into exact (0 for an empty lane); their smallest importances
+    // likewise into lanes_min and exact_min (null: not wanted).
     size_t stops() const { return stops_.size(); }
-    void stop_weighs(const float P[3], const float* N, double* lanes, double* exact) const;
+    void stop_weighs(const float P[3], const float* N, double* lanes, double* exact, double* lanes_min = nullptr,
+                     double* exact_min = nullptr) const;
     // The same with N column i of normals (3 rows, stride n; null: none).
     double pdf(const float P[3], const float* normals, size_t n, size_t i, int64_t key,
                uint64_t receivers = kAllSets) const;
@@ -127,6 +133,7 @@ public:
     struct Stop {
         float center[3][8], half[3][8], radius[8];
         float axis[3][8], cos_o[8], sin_o[8], cos_e[8], slab[8];
+        float cos_b[8], cos_s[8], sin_s[8];
         double energy[8];
         int32_t node[8];    // the node each lane is (-1: empty), for the float64 path
         int32_t target[4];  // target j weighs as lanes 2j, 2j + 1

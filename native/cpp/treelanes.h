@@ -24,10 +24,10 @@ struct TreePoint {
 void tree_point(TreePoint& t, const float P[3], const float* N);
 
 // imp[k]: lane k's importance at the point (energy x incidence and emission cosines / squared
-// distance, lighttree.cpp weigh(), 0 where culled). Returns, per four lanes (bit 0: lanes 0-3,
+// distance, lighttree.cpp weigh(), 0 where culled), imin[k] its smallest (weigh()'s min). Returns, per four lanes (bit 0: lanes 0-3,
 // bit 1: lanes 4-7), whether some lane's squared distance lies outside [1e-30, 1e30] or is NaN:
 // those four must be weighed in float64 (their imp is left to the caller).
-using StopWeighFn = int (*)(const LightTree::Stop& q, const TreePoint& at, double imp[8]);
+using StopWeighFn = int (*)(const LightTree::Stop& q, const TreePoint& at, double imp[8], double imin[8]);
 
 // The widest kernel the CPU runs, or a narrower one DACRT_ISA names (portable, avx2).
 StopWeighFn stop_weigh_fn();
@@ -40,15 +40,16 @@ struct TreeRows {
     const float* N[3];
 };
 // Lane k of stop q weighed at the rows' points [0, m), as StopWeighFn weighs it at each (the
-// same bits): g[i] the weigh before the lane's energy, ok[i] (-1 or 0) whether the lane's
+// same bits): g[i] the weigh before the lane's energy (gmin[i] its smallest), ok[i] (-1 or 0) whether the lane's
 // distances lie in float's range at point i (else its four go to float64). g and ok are
 // written for a whole number of 16 past m.
-using LaneRowsFn = void (*)(const LightTree::Stop& q, int k, const TreeRows& rows, size_t m, float* g, int32_t* ok);
+using LaneRowsFn = void (*)(const LightTree::Stop& q, int k, const TreeRows& rows, size_t m, float* g, float* gmin,
+                            int32_t* ok);
 LaneRowsFn lane_rows_fn();
 
 namespace avx512 {  // the AVX-512 copies (treelanes_avx512.cpp), for lane_copy
-int tree_weigh(const LightTree::Stop& q, const TreePoint& at, double imp[8]);
-void tree_rows(const LightTree::Stop& q, int k, const TreeRows& rows, size_t m, float* g, int32_t* ok);
+int tree_weigh(const LightTree::Stop& q, const TreePoint& at, double imp[8], double imin[8]);
+void tree_rows(const LightTree::Stop& q, int k, const TreeRows& rows, size_t m, float* g, float* gmin, int32_t* ok);
 }  // namespace avx512
 
 }  // namespace dacrt

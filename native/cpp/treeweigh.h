@@ -147,6 +147,9 @@ struct StopAt {
     LANES V sin_o() const { return load<V>(q.sin_o); }
     LANES V cos_e() const { return load<V>(q.cos_e); }
     LANES V slab() const { return load<V>(q.slab); }
+    LANES V cos_b() const { return load<V>(q.cos_b); }
+    LANES V cos_s() const { return load<V>(q.cos_s); }
+    LANES V sin_s() const { return load<V>(q.sin_s); }
     LANES V P(int a) const { return splat<V>(at.P[a]); }
     LANES V N(int a) const { return splat<V>(at.N[a]); }
     LANES V abs_n(int a) const { return splat<V>(at.abs_n[a]); }
@@ -166,6 +169,9 @@ struct LaneAt {
     LANES V sin_o() const { return splat<V>(q.sin_o[k]); }
     LANES V cos_e() const { return splat<V>(q.cos_e[k]); }
     LANES V slab() const { return splat<V>(q.slab[k]); }
+    LANES V cos_b() const { return splat<V>(q.cos_b[k]); }
+    LANES V cos_s() const { return splat<V>(q.cos_s[k]); }
+    LANES V sin_s() const { return splat<V>(q.sin_s[k]); }
     LANES V P(int a) const { return load<V>(rows.P[a] + i); }
     LANES V N(int a) const { return load<V>(rows.N[a] + i); }
     // tree_point's: std::fabs, and std::max of the three (the first largest, NaN as it compares)
@@ -181,10 +187,12 @@ struct LaneAt {
 // distances are in range: the culling tests keep a margin of float's rounding, so no lane weighs
 // 0 that weigh() would not, and a lane not culled weighs more than 0. V: the lanes, M: their
 // masks. ok: the lanes whose distances lie in float's range (the others are weighed in float64
-// by the caller); g: the weigh before the energy. Returns false, g unset, where stop(ok) says
-// so.
+// by the caller); g: the weigh before the energy, gmin: the smallest (as Cycles' min_importance:
+// the incidence and emission cosines at their worst over the node's sphere and cone, 0 inside the
+// sphere, where a light may give nothing, and where g is). Returns false, g and gmin unset, where
+// stop(ok) says so.
 template <class V, class M, bool kNormal, class S, class Stop>
-LANES bool weigh_body(const S& src, V& g, M& ok, Stop stop) {
+LANES bool weigh_body(const S& src, V& g, V& gmin, M& ok, Stop stop) {
     const V zero = splat<V>(0.0f), one = splat<V>(1.0f);
     const V margin = splat<V>(1e-5f);  // ~100 float ULPs of a cosine
     const V v0 = src.center(0) - src.P(0), v1 = src.center(1) - src.P(1), v2 = src.center(2) - src.P(2);
@@ -203,7 +211,7 @@ LANES bool weigh_body(const S& src, V& g, M& ok, Stop stop) {
             root_t = root(max_(dd - av * av, zero));
     const V sin_u = min_(r * inv_d, one), cos_u = min_(root_u * inv_d, one);
     M culled = {}, out_culled = {};  // out_culled: outside the bounds only
-    V f = one;
+    V f = one, fmin = one;
     if (kNormal) {
         const V spread = src.abs_n(0) * src.half(0) + src.abs_n(1) * src.half(1) + src.abs_n(2) * src.half(2);
         const V reach = nv + spread, nv_abs = sel(nv < zero, -nv, nv);
@@ -213,6 +221,7 @@ LANES bool weigh_body(const S& src, V& g, M& ok, Stop stop) {
         const M below = ci < cos_u;
         out_culled = below & !(c > -margin);
         f = sel(below, max_(c, margin), one);
+        fmin = max_(ci * cos_u - sin_i * sin_u, zero);  // cos(theta_i + theta_u), 0 past pi/2
     }
     const V co = src.cos_o(), so = src.sin_o();
     const V cos_p = co * cos_u - so * sin_u, sin_p = so * cos_u + co * sin_u;
@@ -222,6 +231,12 @@ LANES bool weigh_body(const S& src, V& g, M& ok, Stop stop) {
     out_culled = out_culled | (beyond & (cos_r <= src.cos_e() - margin));
     f = sel(beyond, f * max_(cos_r, margin), f);
     culled = culled | (~inside & out_culled);
+    {  // the emission cosine at the worst: theta + theta_u + theta_s within theta_b (ct >= 0)
+        const V c1 = ct * cos_u - sin_t * sin_u, s1 = sin_t * cos_u + ct * sin_u;
+        const V cw = c1 * src.cos_s() - s1 * src.sin_s(), cb = src.cos_b();
+        const V fe = sel((ct >= zero) & (cw >= cb), cw, zero);
+        fmin = fmin * sel(cb < -one, cos_u, fe);
+    }
     {  // behind every light of a node that emits within a hemisphere, inside its sphere too
         const V sl = src.slab();
         const V d = dd * inv_d;  // (NaN at dd = 0: not culled, as the centre is in the box)
@@ -229,43 +244,48 @@ LANES bool weigh_body(const S& src, V& g, M& ok, Stop stop) {
         culled = culled | ((sl >= zero) & (av + sl <= -tol));
     }
     g = sel(culled, zero, sel(inside, one, f) * inv_denom);
+    gmin = sel(culled | inside, zero, fmin * inv_denom);
     return true;
 }
 
 // The eight lanes of stop q weighed at the point (weigh_body), times their energies.
 template <class V, class M, bool kNormal>
-LANES int weigh_lanes(const LightTree::Stop& q, const TreePoint& at, double imp[8]) {
-    V g;
+LANES int weigh_lanes(const LightTree::Stop& q, const TreePoint& at, double imp[8], double imin[8]) {
+    V g, gmin;
     M ok;
     int bad = 0;
-    if (!weigh_body<V, M, kNormal>(StopAt<V>{q, at}, g, ok, [&](const M& o) { return (bad = not_all(o)) == 3; }))
+    if (!weigh_body<V, M, kNormal>(StopAt<V>{q, at}, g, gmin, ok,
+                                   [&](const M& o) { return (bad = not_all(o)) == 3; }))
         return bad;
     for (int k = 0; k < 8; ++k) imp[k] = q.energy[k] * double(lane(g, k));
+    for (int k = 0; k < 8; ++k) imin[k] = q.energy[k] * double(lane(gmin, k));
     return bad;
 }
 
 // Lane k of stop q weighed at points [0, m) of rows (weigh_body), V's width of them at a time
 // (the rows hold a whole number of V past m).
 template <class V, class M, bool kNormal>
-LANES void weigh_rows(const LightTree::Stop& q, int k, const TreeRows& rows, size_t m, float* g, int32_t* ok) {
+LANES void weigh_rows(const LightTree::Stop& q, int k, const TreeRows& rows, size_t m, float* g, float* gmin,
+                      int32_t* ok) {
     constexpr size_t W = sizeof(V) / sizeof(float);
     for (size_t i = 0; i < m; i += W) {
-        V gi;
+        V gi, gm;
         M oki;
-        weigh_body<V, M, kNormal>(LaneAt<V>{q, k, rows, i}, gi, oki, [](const M&) { return false; });
+        weigh_body<V, M, kNormal>(LaneAt<V>{q, k, rows, i}, gi, gm, oki, [](const M&) { return false; });
         __builtin_memcpy(g + i, &gi, sizeof gi);
+        __builtin_memcpy(gmin + i, &gm, sizeof gm);
         __builtin_memcpy(ok + i, &oki, sizeof oki);
     }
 }
 
 #define DACRT_TREE_ISA(NAME, TARGET, V, M, VR, MR)                                                         \
-    TARGET int NAME##_weigh(const LightTree::Stop& q, const TreePoint& at, double imp[8]) {                \
-        return at.N ? weigh_lanes<V, M, true>(q, at, imp) : weigh_lanes<V, M, false>(q, at, imp);           \
+    TARGET int NAME##_weigh(const LightTree::Stop& q, const TreePoint& at, double imp[8], double imin[8]) { \
+        return at.N ? weigh_lanes<V, M, true>(q, at, imp, imin) : weigh_lanes<V, M, false>(q, at, imp, imin); \
     }                                                                                                      \
     TARGET void NAME##_rows(const LightTree::Stop& q, int k, const TreeRows& rows, size_t m, float* g,      \
-                            int32_t* ok) {                                                                 \
+                            float* gmin, int32_t* ok) {                                                    \
         if (rows.N[0])                                                                                     \
-            weigh_rows<VR, MR, true>(q, k, rows, m, g, ok);                                                \
+            weigh_rows<VR, MR, true>(q, k, rows, m, g, gmin, ok);                                          \
         else                                                                                               \
-            weigh_rows<VR, MR, false>(q, k, rows, m, g, ok);                                               \
+            weigh_rows<VR, MR, false>(q, k, rows, m, g, gmin, ok);                                         \
     }

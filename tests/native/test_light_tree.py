@@ -25,11 +25,18 @@ def tree_of(centers, half, energy, axis=None, cos_o=None, cos_e=None, keys=None)
 
 
 def random_tree(rng, m, one_sided=0.5, scale=1.0):
+    """Area-like lights (a hemisphere), spot-like ones (a cone, no falloff), point lamps (alike
+    every way: cos_e -1) and two-sided emitters (every direction, cos_e 0): the smallest
+    importance > 0 at some points for all but the last."""
     c = rng.uniform(-5, 5, (3, m)) * scale
     axis = rng.normal(size=(3, m))
     axis /= np.linalg.norm(axis, axis=0)
-    cos_o = np.where(rng.random(m) < one_sided, 1.0, EVERY)     # area-like (a hemisphere) or point-like
-    return tree_of(c, rng.uniform(0.0, 0.3, (3, m)) * scale, rng.uniform(0.1, 10.0, m), axis, cos_o,
+    kind = np.where(rng.random(m) < one_sided, rng.integers(0, 2, m), rng.integers(2, 4, m))
+    cos_o = np.choose(kind, [1.0, rng.uniform(0.3, 0.95, m), EVERY, EVERY])
+    # (spot-like: a falloff of 8 degrees, not a spot's none: at cos_e 1 the float path's culling
+    # margin of 1e-5 in the cosine is 0.26 degrees wide, where float64 culls and float does not)
+    cos_e = np.choose(kind, [0.0, 0.99, -1.0, 0.0])
+    return tree_of(c, rng.uniform(0.0, 0.3, (3, m)) * scale, rng.uniform(0.1, 10.0, m), axis, cos_o, cos_e,
                    keys=np.arange(m) + 7)
 
 
@@ -104,24 +111,96 @@ def importance(center, radius, energy, P, axis=None, one_sided=False):
     return energy * f / d2
 
 
-def test_two_lights_split_by_importance():
-    """Two lights: the pick is the ratio of their importances, computed independently here."""
+def smallest_importance(center, radius, energy, P, axis=None, one_sided=False, alike=False):
+    """Cycles' min_importance (kernel/light/tree.h) in float64, as lighttree.cpp's weigh() takes
+    it without a normal: 0 inside the sphere; a light alike every way (a point lamp) energy x
+    cos(theta_u) / d^2, as Cycles orients a point light's disk toward P; a one-sided light
+    (theta_o = 0, theta_e = pi/2) energy x cos(theta + theta_u) / d^2 where theta + theta_u <=
+    pi/2 (and theta <= pi/2), else 0; a light of every direction otherwise (a two-sided
+    emitter) 0: it may give nothing."""
+    v = np.asarray(center, np.float64) - P
+    d2 = v @ v
+    if d2 <= radius ** 2 or not (alike or one_sided):
+        return 0.0
+    d = np.sqrt(d2)
+    theta_u = np.arcsin(radius / d)
+    if alike:
+        return energy * np.cos(theta_u) / d2
+    theta = np.arccos(np.clip(-(np.asarray(axis) @ v) / d, -1, 1))
+    if theta > np.pi / 2 or theta + theta_u > np.pi / 2:
+        return 0.0
+    return energy * np.cos(theta + theta_u) / d2
+
+
+def cycles_split(imax, imin):
+    """Cycles' get_left_probability for each light of a split: the mean of the shares by the
+    largest and by the smallest importances; where the smallest sum to 0, the second share even
+    among the lights whose largest is > 0."""
+    imax, imin = np.asarray(imax, np.float64), np.asarray(imin, np.float64)
+    second = imin / imin.sum() if imin.sum() > 0 else (imax > 0) / (imax > 0).sum()
+    return 0.5 * (imax / imax.sum() + second)
+
+
+@pytest.mark.parametrize("alike", [False, True])
+def test_two_lights_split_by_importance(alike):
+    """Two lights, one of every direction (a two-sided emitter, or alike every way: a point
+    lamp, cos_e -1) and one one-sided: the pick is Cycles' mean of the shares by their largest
+    and smallest importances, computed independently here (the smallest matters at most points:
+    the one-sided light's is > 0 wherever the point lies well within its hemisphere)."""
     rng = np.random.default_rng(5)
+    seen = 0
     for _ in range(50):
         c = rng.uniform(-3, 3, (3, 2))
         E = rng.uniform(0.5, 20.0, 2)
         axis = rng.normal(size=3)
         axis /= np.linalg.norm(axis)
         half = 0.1
-        tree = tree_of(c, half, E, axis=np.stack([[0, 0, 1.0], axis], 1), cos_o=[EVERY, 1.0])
+        tree = tree_of(c, half, E, axis=np.stack([[0, 0, 1.0], axis], 1), cos_o=[EVERY, 1.0],
+                       cos_e=[-1.0 if alike else 0.0, 0.0])
         P = rng.uniform(-4, 4, 3).astype(F32)
         r = np.sqrt(3) * half
         # the stored bounds: the boxes' float32 centres and their half-diagonals
         c32 = ((c - half).astype(F32).astype(np.float64) + (c + half).astype(F32).astype(np.float64)) / 2
-        ia = importance(c32[:, 0], r, E[0], P.astype(np.float64))
-        ib = importance(c32[:, 1], r, E[1], P.astype(np.float64), axis=axis, one_sided=True)
+        Q = P.astype(np.float64)
+        ia = importance(c32[:, 0], r, E[0], Q)
+        ib = importance(c32[:, 1], r, E[1], Q, axis=axis, one_sided=True)
+        ma = smallest_importance(c32[:, 0], r, E[0], Q, alike=alike)
+        mb = smallest_importance(c32[:, 1], r, E[1], Q, axis=axis, one_sided=True)
+        seen += mb > 0
         pdf = tree.pdf(np.repeat(P[:, None], 2, 1), np.array([0, 1]))
-        assert pdf[1] == pytest.approx(ib / (ia + ib), rel=1e-4, abs=1e-12)
+        assert pdf[1] == pytest.approx(cycles_split([ia, ib], [ma, mb])[1], rel=1e-4, abs=1e-12)
+    assert seen > 5
+
+
+def test_a_faint_light_that_surely_reaches_keeps_half_the_samples():
+    """Fuzz seed 10's case (README, the light tree): a faint narrow spot over the point beside a
+    tilted area light ~3000x brighter whose Spread may or may not reach it. By the largest
+    importances alone the spot got ~1e-3 of the samples; by Cycles' rule (the area light's
+    smallest importance is 0 there, the spot's > 0) about half, and sampling follows the pdf."""
+    # spot 2 m above the point aiming down (cone 30 degrees); area light 1.8 m off to the side
+    # (its sphere 22 degrees wide from there), facing 70 degrees off the point's direction:
+    # within its 80-degree reach (Spread 160 degrees), but not surely (70 + 22 > 80)
+    spot_c, area_c = np.array([0.0, 0.0, 2.0]), np.array([1.5, 0.0, 1.0])
+    to_p = -area_c / np.linalg.norm(area_c)
+    a = np.radians(70.0)
+    area_axis = np.array([to_p[0] * np.cos(a) + to_p[2] * np.sin(a), 0.0, -to_p[0] * np.sin(a) + to_p[2] * np.cos(a)])
+    assert np.degrees(np.arccos(area_axis @ to_p)) == pytest.approx(70.0)
+    c = np.stack([spot_c, area_c], 1)
+    h = np.array([[0.02, 0.4], [0.02, 0.4], [0.02, 0.4]])
+    axis = np.stack([[0.0, 0.0, -1.0], area_axis], 1)
+    cos_o = np.array([np.cos(np.radians(30.0)), 1.0])
+    cos_e = np.array([1.0, np.cos(np.radians(80.0))])
+    E = np.array([1.0, 3000.0])
+    tree = lamps.light_tree((c - h).astype(F32), (c + h).astype(F32), axis, cos_o, cos_e, E, np.arange(2))
+    P = np.zeros((3, 1), F32)
+    pdf = tree.pdf(np.repeat(P, 2, 1), np.arange(2))
+    assert pdf.sum() == pytest.approx(1.0, abs=1e-12)
+    assert 0.45 < pdf[0] < 0.55
+    n = 200_000
+    got, prob = tree.sample(np.repeat(P, n, 1), np.random.default_rng(1).random(n))
+    np.testing.assert_allclose(prob, pdf[got], rtol=1e-12)
+    freq = np.bincount(got, minlength=2) / n
+    assert np.all(np.abs(freq - pdf) <= 5 * np.sqrt(pdf * (1 - pdf) / n))
 
 
 def test_a_light_facing_away_is_never_picked_and_delta_lights_always_can_be():
@@ -150,10 +229,14 @@ def test_one_light_and_coincident_lights():
     assert one.members == 1 and one.nodes == 1
     key, prob = one.sample(np.zeros((3, 3), F32), np.array([0.0, 0.5, 1.0]))
     assert key.tolist() == [5, 5, 5] and prob.tolist() == [1.0, 1.0, 1.0]
-    # the same place, energies 1 : 3: a point anywhere splits them 1 : 3 (P on them too)
+    # the same place, energies 1 : 3: a point anywhere splits them by Cycles' mean of 1 : 3 (the
+    # largest importances) and 1 : 1 (the smallest, 0: two-sided emitters may give nothing), P
+    # on them too; lights alike every way (cos_e -1) by 1 : 3 both ways away from them
     same = tree_of(np.zeros((3, 2)), 0.0, [1.0, 3.0])
     for P in (np.zeros((3, 1), F32), np.ones((3, 1), F32)):
-        np.testing.assert_allclose(same.pdf(np.repeat(P, 2, 1), np.array([0, 1])), [0.25, 0.75])
+        np.testing.assert_allclose(same.pdf(np.repeat(P, 2, 1), np.array([0, 1])), [0.375, 0.625])
+    alike = tree_of(np.zeros((3, 2)), 0.0, [1.0, 3.0], cos_e=[-1.0, -1.0])
+    np.testing.assert_allclose(alike.pdf(np.ones((3, 2), F32), np.array([0, 1])), [0.25, 0.75])
 
 
 @pytest.mark.parametrize('bad, message', [

@@ -18,7 +18,8 @@ EVERY = -1.0      # cos_o of a light that emits in every direction
 
 def lights(rng, m, one_sided=0.5, scale=1.0):
     """m random lights: (lo, hi, axis, cos_o, cos_e, energy); area-like (a cone within a
-    hemisphere) or point-like (every direction), some very faint."""
+    hemisphere) or point-like (every direction: half of them alike every way, cos_e -1, whose
+    smallest importance counts), some very faint."""
     c = rng.uniform(-5, 5, (3, m)) * scale
     h = rng.uniform(0.0, 0.3, (3, m)) * scale
     axis = rng.normal(size=(3, m))
@@ -26,7 +27,9 @@ def lights(rng, m, one_sided=0.5, scale=1.0):
     cos_o = np.where(rng.random(m) < one_sided, rng.uniform(0.0, 1.0, m), EVERY)
     energy = rng.uniform(0.1, 10.0, m)
     energy[rng.random(m) < 0.1] = 1e-30
-    return (c - h).astype(F32), (c + h).astype(F32), axis, cos_o, rng.uniform(0.0, 1.0, m), energy
+    cos_e = rng.uniform(0.0, 1.0, m)
+    cos_e[(cos_o == EVERY) & (np.arange(m) % 2 == 0)] = -1.0    # (drawing nothing more from rng)
+    return (c - h).astype(F32), (c + h).astype(F32), axis, cos_o, cos_e, energy
 
 
 def tree_of(lo, hi, axis, cos_o, cos_e, energy):
@@ -131,6 +134,33 @@ def test_lanes_weigh_as_float64(with_normal):
         kept += (lanes > 0).sum()
         culled += (exact == 0).sum()
     assert kept > 0 and culled > 0
+
+
+@pytest.mark.parametrize("with_normal", [True, False])
+def test_lanes_smallest_weigh_as_float64(with_normal):
+    """Each lane's smallest importance (Cycles' min_importance) as the float64 weigh()'s: 0
+    wherever the largest is, never above it (beyond float's rounding), within float's
+    precision of float64's relative to its stop's largest, except at the few points where
+    theta + theta_u + theta_s rounds to the other side of a cone's theta_b; > 0 and 0 both
+    seen."""
+    rng = np.random.default_rng(19)
+    tree = tree_of(*lights(rng, 400))
+    some = none = off = total = 0
+    for P, N in zip(rng.uniform(-7, 7, (300, 3)).astype(F32), unit(rng, 300).T):
+        nv = N if with_normal else None
+        lanes, exact = tree.stop_weighs(P, nv)
+        lmin, emin = tree.stop_weighs(P, nv, smallest=True)
+        assert np.all(lmin >= 0) and np.isfinite(lmin).all()
+        assert np.all(lmin[lanes == 0] == 0) and np.all(emin[exact == 0] == 0)
+        big = np.maximum(exact.max(axis=1, keepdims=True), 1e-300)
+        assert np.all(lmin / big <= lanes / big + 1e-4) and np.all(emin <= exact * (1 + 1e-12))
+        near = np.isclose(lmin / big, emin / big, rtol=1e-4, atol=1e-4)
+        off += (~near).sum()
+        total += near.size
+        some += (emin > 0).sum()
+        none += ((emin == 0) & (exact > 0)).sum()
+    assert some > 0 and none > 0
+    assert off <= 1e-3 * total
 
 
 def _is_distribution(tree, m, P, N, rng, n=4000):
