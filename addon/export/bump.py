@@ -31,6 +31,51 @@ def bump_nodes(socket):
     return nodes, socket
 
 
+# The BSDFs Cycles 5.0.1 renders black where a Bump of NaN Distance (a script's) with its Height
+# linked bends them, its normal NaN (measured on a lit plane, 64 spp: Diffuse, Glossy,
+# Translucent and Principled 0; the material's emission, transparency and unbent BSDFs kept). A
+# Glass or Sheen is not black there (0.02 and 0.28 of DACRT's 0.45 and 0.40): left as before, said
+NAN_BUMP_BLACKENS = frozenset({'BSDF_DIFFUSE', 'BSDF_GLOSSY', 'BSDF_TRANSLUCENT', 'BSDF_PRINCIPLED'})
+
+
+def nan_distance_bump(socket):
+    """The name of a Bump of NaN Distance (unlinked) among those bending what feeds socket
+    (bump_nodes), or None."""
+    for node in bump_nodes(socket)[0]:
+        d = node.inputs['Distance']
+        if linked_link(d) is None and d.default_value != d.default_value:
+            return node.name
+    return None
+
+
+def blackened_by_nan_bump(bsdf):
+    """Whether a BSDF node bent by a Bump of NaN Distance is rendered black as Cycles renders it
+    (NAN_BUMP_BLACKENS): a Principled only without emission and alpha, which take no normal and
+    which Cycles keeps (the closure here has no part to keep them apart)."""
+    if bsdf.type not in NAN_BUMP_BLACKENS:
+        return False
+    if bsdf.type == 'BSDF_PRINCIPLED':
+        alpha, a_const = constant_value(bsdf.inputs['Alpha'])
+        strength, s_const = constant_value(bsdf.inputs['Emission Strength'])
+        return a_const and alpha >= 1.0 and s_const and strength == 0.0
+    return True
+
+
+def nan_bump_all_blackened(bump, depth=0):
+    """Whether every BSDF a Bump node's Normal output bends (directly or through other Bumps'
+    Normal) is one blackened_by_nan_bump renders black: its NaN then needs no other word."""
+    links = [link for link in bump.outputs['Normal'].links if not link.is_muted]
+    if not links or depth > 64:
+        return False
+    for link in links:
+        to = link.to_node
+        if link.to_socket.identifier != 'Normal':
+            return False
+        if not (blackened_by_nan_bump(to) or (to.type == 'BUMP' and nan_bump_all_blackened(to, depth + 1))):
+            return False
+    return True
+
+
 def _white_noise_feeds(socket, seen=None, depth=0) -> bool:
     """Whether a White Noise Texture computes part of socket's value (through any nodes)."""
     seen = set() if seen is None else seen

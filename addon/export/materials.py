@@ -27,7 +27,7 @@ from ..nodegraph import (closure_link, compiled, cycle_said, dead_group_outputs,
 from ..procedural import ProceduralTexels
 from .aovs import shader_aovs
 from .attributemaps import AttributeMaps, affine_fit, marked_label, probe_albedo
-from .bump import displacement_bump
+from .bump import displacement_bump, nan_bump_all_blackened
 from .closure import Closure
 from .reflectors import (ROUGH_DIFFUSE_AVERAGED, ROUGH_DIFFUSE_WHY, glossy_kinds, has_glossy_closure,
                          rendered_closures)
@@ -63,11 +63,13 @@ IGNORED_OUTPUTS = ('Volume',)
 # in Cycles, where 0 gives 0)
 NAN_NOT_ZERO_IN_CYCLES = {'BSDF_HAIR_PRINCIPLED': (('Radial Roughness', 'Offset', 'Random Roughness'), "black"),
                           'BSDF_GLOSSY': (('Anisotropy',), "otherwise"),
-                          'BUMP': (('Distance',), "black (the bumped normal NaN)")}
+                          'BUMP': (('Distance',), "otherwise (its bumped normal NaN)")}
 # ... of those, where the node's NaN is read at all: a Bump's only with its Height linked (Cycles
 # drops a Bump of constant Height; measured, a Wave Texture's Fac as Height under a sun: Cycles
 # black, DACRT a flat 0.64, said "read as 0 (as Cycles clamps it)"; a constant Height: both 0.64)
-_NAN_READ_WHEN = {'BUMP': lambda node: source(node.inputs['Height'])[0] is not None}
+# (and not where every BSDF it bends is one rendered black as Cycles renders it, which
+# shaders.py says: what is left, a Glass's or Sheen's, Cycles renders otherwise, not black)
+_NAN_READ_WHEN = {'BUMP': lambda node: source(node.inputs['Height'])[0] is not None and not nan_bump_all_blackened(node)}
 NAN_COMPUTED = {'LAYER_WEIGHT': ('Blend',)}
 # Inputs at float32's largest magnitude (Blender stores an 'inf' typed as 3.4e38) that Cycles
 # computes in float32 into what DACRT does not reproduce (measured, Cycles 5.0.1, each input

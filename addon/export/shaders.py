@@ -14,6 +14,7 @@ from ..nodeeval import constant_color, constant_value
 from ..nodegraph import input_socket, linked_link
 from ..texture import ImageTexels, LazyTexels, stored_texels
 from . import metallicmaps, pointnormals, procedurals
+from .bump import NAN_BUMP_BLACKENS, blackened_by_nan_bump, nan_distance_bump
 from .closure import Closure, Texture, is_image_alpha
 from .cutouts import MISSING_ALPHA
 from .images import MISSING_IMAGE
@@ -102,6 +103,14 @@ class ShaderClosures:
             reasons.append("shader graph too deep")
             return Closure(const=DEFAULT_ALBEDO)
         t = node.type
+        if t in NAN_BUMP_BLACKENS and blackened_by_nan_bump(node):
+            bump = nan_distance_bump(node.inputs.get('Normal'))
+            if bump is not None:
+                # (its normal NaN in Cycles: this BSDF black, the rest kept; it had been lit
+                # unbent, a plane 0.40 where Cycles is 0)
+                reasons.append(f"{node.bl_label} '{node.name}' bent by Bump '{bump}' of NaN Distance renders "
+                               "black, as in Cycles (its bumped normal NaN)")
+                return Closure()
         if t == 'BSDF_DIFFUSE':
             self._normal_input(node, reasons)
             c = _clamped_weight(self._color_closure(node.inputs['Color'], reasons))
