@@ -408,6 +408,24 @@ def panorama_world(name, samples=16):
     return sc, world
 
 
+def panorama_agrees(scene, directory, label):
+    """Renders a panorama_world scene with both engines and asserts DACRT's image within 3% of
+    Cycles' by eighths (two bands of rows, four of columns) and the ball's (the image's centre,
+    lit by the world: the light's direction and amount) within 5%."""
+    layer = scene.view_layers[0].name
+    imgs = {e: np.stack([exr[f"{layer}.Combined.{c}"] for c in 'RGB'], -1).astype(np.float64)
+            for e, exr in render_engines(scene, directory).items()}
+    d, c = imgs['DACRT'], imgs['CYCLES']
+    for rows in np.array_split(np.arange(32), 2):
+        for cols in np.array_split(np.arange(64), 4):
+            part = np.ix_(rows, cols)
+            np.testing.assert_allclose(d[part].mean(axis=(0, 1)), c[part].mean(axis=(0, 1)), rtol=0.03, atol=0.003,
+                                       err_msg=f"{label}: rows {rows[0]}, columns {cols[0]}")
+    ball = (slice(13, 19), slice(29, 35))
+    np.testing.assert_allclose(d[ball].mean(axis=(0, 1)), c[ball].mean(axis=(0, 1)), rtol=0.05, atol=0.003,
+                               err_msg=f"{label}: ball")
+
+
 def black_world(scene=None):
     return world((0, 0, 0), 0.0, scene)
 
