@@ -69,7 +69,8 @@ NAN_NOT_ZERO_IN_CYCLES = {'BSDF_HAIR_PRINCIPLED': (('Radial Roughness', 'Offset'
 # black, DACRT a flat 0.64, said "read as 0 (as Cycles clamps it)"; a constant Height: both 0.64)
 # (and not where every BSDF it bends is one rendered black as Cycles renders it, which
 # shaders.py says: what is left, a Glass's or Sheen's, Cycles renders otherwise, not black)
-_NAN_READ_WHEN = {'BUMP': lambda node: source(node.inputs['Height'])[0] is not None and not nan_bump_all_blackened(node)}
+_NAN_READ_WHEN = {'BUMP': lambda node: source(node.inputs['Height'])[0] is not None
+                   and not nan_bump_all_blackened(node)}
 NAN_COMPUTED = {'LAYER_WEIGHT': ('Blend',)}
 # Inputs at float32's largest magnitude (Blender stores an 'inf' typed as 3.4e38) that Cycles
 # computes in float32 into what DACRT does not reproduce (measured, Cycles 5.0.1, each input
