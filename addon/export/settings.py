@@ -72,7 +72,10 @@ def frame_seed(seed, frame, subframe=0.0):
     frame on every render."""
     h = mix64_scalar(mix64_scalar(int(seed) + 0x9E3779B97F4A7C15) ^ (int(frame) & 0xFFFFFFFF))
     if subframe:
-        h = mix64_scalar(h ^ int(float(subframe) * 0x7FFFFFFF))
+        # (a script's NaN subframe, frame_set(f, subframe=nan), which Blender keeps: read as
+        # Cycles' (int) conversion of it on x86, INT_MIN, where int() had failed the render)
+        scaled = float(subframe) * 0x7FFFFFFF
+        h = mix64_scalar(h ^ ((int(scaled) if math.isfinite(scaled) else -0x80000000) & 0xFFFFFFFF))
     return h & 0x7FFFFFFF
 
 

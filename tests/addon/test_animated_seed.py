@@ -35,3 +35,19 @@ def test_cycles_culling_is_said_not_applied(scene, said):
     scene.cycles.use_camera_cull = True
     scenes.render_rgba(scene)
     assert any("Culling (camera) is not applied" in t for t in said), said
+
+
+def test_a_nan_subframe_renders_with_its_own_seed(scene, said):
+    """A script's frame_set(f, subframe=nan) keeps the NaN (Blender; Cycles 5.0.1 renders it):
+    the animated seed read it through int(), which failed the render ('cannot convert float NaN
+    to integer'). It is read as Cycles' conversion gives it on x86, INT_MIN."""
+    assert 0 <= frame_seed(3, 5, float('nan')) < 2 ** 31
+    assert frame_seed(3, 5, float('nan')) == frame_seed(3, 5, float('nan')) != frame_seed(3, 5)
+    build_demo_scene(scene, resolution=16, samples=2)
+    scene.dacrt.use_animated_seed = True
+    scene.frame_set(1, subframe=float('nan'))
+    assert scene.frame_subframe != scene.frame_subframe
+    img = scenes.render_rgba(scene)
+    assert not [t for t in said if "failed" in t], said
+    assert np.isfinite(img).all() and img[..., :3].mean() > 0.01
+    assert np.array_equal(img, scenes.render_rgba(scene))
