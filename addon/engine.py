@@ -644,8 +644,18 @@ def _settings_key(scene):
     r = scene.render
     cyc = getattr(scene, 'cycles', None)
     glass = (getattr(cyc, 'film_transparent_glass', None), getattr(cyc, 'film_transparent_roughness', None))
-    return (own, r.film_transparent, glass, scene.frame_current, scene.frame_subframe,
-            scene.world.name if scene.world else None)
+    key = (own, r.film_transparent, glass, scene.frame_current, scene.frame_subframe,
+           scene.world.name if scene.world else None)
+    # (a script's NaN, a stored setting's or frame_set's subframe, as a value equal to itself:
+    # NaN != NaN had made every selection restart the viewport, its samples thrown away)
+    return tuple(_nan_as_str(v) for v in key)
+
+
+def _nan_as_str(v):
+    """v with its NaN floats (in tuples too) as 'nan': compared equal to themselves."""
+    if isinstance(v, tuple):
+        return tuple(_nan_as_str(x) for x in v)
+    return 'nan' if isinstance(v, float) and v != v else v
 
 
 # Blender cuts a report at about 1,024 bytes (the rest was lost: 8 of a tester's 18 approximated

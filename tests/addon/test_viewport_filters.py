@@ -56,3 +56,31 @@ def test_transparent_glass_is_part_of_the_viewports_settings_key(scene):
     before = _settings_key(scene)
     scene.cycles.film_transparent_roughness = 0.37
     assert _settings_key(scene) != before
+
+
+def test_a_selection_keeps_the_samples_with_a_nan_setting(scene):
+    """A script's NaN in a stored setting (here Clamp Indirect, which the render reads as its
+    default, said) or a NaN subframe made the viewport's settings key differ from itself (NaN !=
+    NaN): every selection restarted the render, its samples thrown away."""
+    from addon.engine import _settings_key
+    cam = _lit_box(scene)
+    scene.dacrt.samples = scene.dacrt.preview_samples = 4
+    scene.dacrt.sample_clamp_indirect = float('nan')
+    scene.frame_set(1, subframe=float('nan'))
+    assert _settings_key(scene) == _settings_key(scene)
+    engine, ctx = _Engine(), _cam_context(cam, perspective='PERSP')
+
+    def handler(sc, dg):
+        engine.view_update(ctx, dg)
+    dg = bpy.context.evaluated_depsgraph_get()
+    engine.view_update(ctx, dg)
+    _finished(engine._viewport)
+    bpy.app.handlers.depsgraph_update_post.append(handler)
+    try:
+        session = engine._viewport
+        bpy.data.objects['Box'].select_set(True)
+        dg.update()
+        assert engine._viewport is session
+    finally:
+        bpy.app.handlers.depsgraph_update_post.remove(handler)
+        engine._viewport.stop()
