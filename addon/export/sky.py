@@ -58,6 +58,10 @@ def node_sky(node, reasons=None):
         if reasons is not None:
             reasons.append(f"Sky Texture '{node.name}': Sun Size is nan; its sun disc is not rendered (Cycles "
                            "renders part of that sun's light)")
+    if sun_disc and np.isnan(node.sun_intensity) and reasons is not None:
+        # (Cycles 5.0.1 renders it as an intensity of 0, measured on a floor under the sky:
+        # 2.2244 against 2.2245 with 0, 12.34 with 1; so does the model here, had silently)
+        reasons.append(f"Sky Texture '{node.name}': Sun Intensity is nan; its sun disc gives no light, as in Cycles")
     return model.Sky.from_node_values(
         node.sky_type == 'MULTIPLE_SCATTERING', node.sun_elevation, node.sun_rotation,
         sun_disc=sun_disc, sun_size=float(node.sun_size), sun_intensity=float(node.sun_intensity),

@@ -66,3 +66,17 @@ def test_nan_sun_size_renders_the_sky_without_its_disc(scene, said):
     img = scenes.render_rgba(scene)
     assert np.array_equal(img, without)
     assert any("Sky Texture 'Sky Texture': Sun Size is nan; its sun disc is not rendered" in t for t in said), said
+
+
+def test_nan_sun_intensity_renders_the_disc_dark_as_cycles_and_is_named(scene, said):
+    """Cycles 5.0.1 renders a NaN Sun Intensity as 0 (a floor under the sky: 2.2244, 2.2245 with
+    0, 12.34 with 1), as DACRT did, but silently."""
+    _sky_scene(scene, sun_intensity=0.0)
+    dark = scenes.render_rgba(scene)
+    assert not any("Sky Texture" in t for t in said), said
+    sky = bpy.context.scene.world.node_tree.nodes['Sky Texture']
+    sky.sun_intensity = NAN
+    img = scenes.render_rgba(scene)
+    assert np.array_equal(img, dark)
+    assert any("Sky Texture 'Sky Texture': Sun Intensity is nan; its sun disc gives no light, as in Cycles" in t
+               for t in said), said
