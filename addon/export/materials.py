@@ -35,8 +35,8 @@ from .cutouts import Cutouts
 from .emission import Emission
 from .groupinputs import grouped_inputs
 from .imagetextures import TEXTURE_EXTENSIONS, ImageTextures
-from .nanmessages import nan_found
 from .meshes import STANDARD_OF, per_primitive
+from .nanmessages import nan_found
 from .objectinfo import OBJECT_INFO
 from . import pointnormals, rayvariants
 from .procedurals import PROCEDURAL_TYPES, TEXCOORD_UV
