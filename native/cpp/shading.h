@@ -243,7 +243,8 @@ void survivor_range(const Hit* hits, size_t n, const float* albedo, size_t M, co
 
 // Emission that rays (origins O, unit directions D: 3 rows, stride n) meet on emissive triangles
 // (two-sided), added to L (3 rows, stride N) at column pid[i] (distinct per ray). Rays with
-// hit[i] set whose triangle has emissive[prim]: emission (3 rows of M, radiance per triangle)
+// hit[i] set (hit null: every ray; a miss, prim < 0, meets none) whose triangle has
+// emissive[prim]: emission (3 rows of M, radiance per triangle)
 // x thr (3 rows, stride n; null = 1) x, for BSDF rays (tri_prob non-null; triangles of
 // tri_prob 0 are never light-sampled: weight 1), the power-heuristic weight against light
 // sampling of that triangle, 1 / (1 + (tri_prob pdf_light / pdf)^2), pdf_light the solid-angle
