@@ -278,6 +278,43 @@ def test_one_area_lamp_drawn_lane_by_lane_equals_the_composed_kernels(name, thr,
         assert 0.05 < use.mean() < 0.95
 
 
+@pytest.mark.parametrize('flat', [True, False])
+@pytest.mark.parametrize('shadow,skip_work', [(True, True), (True, False), (False, True)])
+def test_chunks_drawn_whole_in_lanes_equal_the_composed_kernels(flat, shadow, skip_work):
+    """A chunk whose every point drew its sample in lanes (one area lamp without spread) takes a
+    loop of its own without a branch per point (nextevent.cpp drawn_points: a ray written at the
+    next place for every point, counted where it is traced): bit for bit the composed kernels, for
+    a lamp with and without shadow rays, with and without skip_work, flat and smooth points, the
+    skip triangles, points toward the back of their surface, on the lamp (zero-length rays) and
+    behind it, over several blocks of shadow rays."""
+    rng = np.random.default_rng(71 + 2 * flat + 4 * shadow + 8 * skip_work)
+    rec = lamp_records([make('area_rectangle')])
+    one = shading.LightChoice(rec, [1.0], [1.0], [False], [shadow])
+    n = 3 * 4096 + 517
+    P, P_off, ns, ng, th, keys = _points(rng, n, flat=flat, thr=True)
+    r = rec[0]
+    pos, ax, normal = r[5:8], r[14:17], r[26:29]
+    special = [pos, pos + 0.3 * ax, pos + 1e-6 * normal, pos - 0.2 * normal, pos + 0.01 * normal]
+    P[:, :len(special)] = np.asarray(special, F32).T
+    P_off[:, :len(special)] = P[:, :len(special)]
+    prim = rng.integers(0, 1000, n).astype(np.int32)
+    with np.errstate(invalid='ignore', over='ignore'):
+        got = shading.next_event(one, P, P_off, ns, ng, th, keys, 3, 4, prim=prim, skip_work=skip_work)
+        ref = _composed(one, P, P_off, ns, ng, th, keys, 3, 4, None, prim, skip_work)
+    for name, a, b in zip(('value', 'contrib', 'rays', 'send', 'skip'), got[:5], ref[:5]):
+        assert a.dtype == b.dtype and a.shape == b.shape, name
+        assert np.array_equal(a.view(np.uint8), b.view(np.uint8)), f'{name} differs'
+    assert got[5] == ref[5]
+    value, contrib, rays, send, skip, skipped = got
+    assert contrib.any() and (len(send) > 0) == shadow
+    if shadow and not flat:   # some rays leave from the mirrored step (toward the back of their surface)
+        assert (rays['org'] != P_off[:, send].T).any(axis=1).any()
+    if skip_work:
+        assert 0 < skipped < n and (~contrib).any()
+    else:
+        assert skipped == 0
+
+
 def test_next_event_checks_its_arguments():
     rng = np.random.default_rng(6)
     lc = _lights(rng, True, True)
