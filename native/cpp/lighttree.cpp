@@ -153,15 +153,17 @@ void lane_weighs(const LightTreeNode* nodes, const LightTree::Stop& q, const Tre
     exact_halves(nodes, q, weigh_lanes(q, at, imp, imin), at.P, at.N, imp, imin);
 }
 
-// The targets' shares where their largest importances t sum to s > 0 (finite), as Cycles'
-// get_left_probability splits a node: the mean of the shares by the largest and by the smallest
-// importances tm (sm their sum), or where the smallest sum to 0 (or overflow) the mean with an
-// even share among the targets whose largest is > 0 (n of them, inv_n = 1 / n). A light that may
-// give nothing beside a brighter one that may give nothing too still gets about half the samples
-// (fuzz seed 10, README). The same operations, in order, as pick_rows' lanes.
-inline __attribute__((always_inline)) double share(double t, double tm, double inv, double inv_m, bool ok_m,
-                                                   double inv_n) {
-    return 0.5 * (t * inv + (ok_m ? tm * inv_m : (t > 0.0 ? inv_n : 0.0)));
+// The targets' shares where their largest importances t sum to s > 0 (finite, inv = 1 / s), as
+// Cycles' get_left_probability splits a node: the mean of the shares by the largest and by the
+// smallest importances tm (inv_m = 1 / their sum), so that a light that surely reaches the point
+// keeps about half the samples beside a brighter one that may give nothing there (fuzz seed 10,
+// README). Where the smallest sum to 0 (or overflow), the share by the largest alone, as before:
+// Cycles then takes an even share among the targets that can give anything, which made a street
+// of 16 point lamps 23x noisier (its inner nodes' smallest are all 0: the walk's first stop sent
+// 3/8 of the samples to the far quarters; README). The same operations, in order, as pick_rows'
+// lanes.
+inline __attribute__((always_inline)) double share(double t, double tm, double inv, double inv_m, bool ok_m) {
+    return ok_m ? 0.5 * (t * inv + tm * inv_m) : t * inv;
 }
 
 // The probabilities at P of a walk at stop q going on to each of its targets (see
@@ -189,18 +191,17 @@ inline __attribute__((always_inline)) void probs_of(const LightTreeNode* nodes, 
     }
     if (!any)
         for (int j = 0; j < 4; ++j) eligible[j] = q.target[j] >= 0;
-    double t[4], tm[4], s = 0.0, sm = 0.0, n = 0.0;
+    double t[4], tm[4], s = 0.0, sm = 0.0;
     for (int j = 0; j < 4; ++j) {
         t[j] = eligible[j] ? imp[2 * j] + imp[2 * j + 1] : 0.0;
         tm[j] = eligible[j] ? imin[2 * j] + imin[2 * j + 1] : 0.0;
         s += t[j];
         sm += tm[j];
-        n += t[j] > 0.0 ? 1.0 : 0.0;
     }
     if (s > 0.0 && std::isfinite(s)) {
-        const double inv = 1.0 / s, inv_m = 1.0 / sm, inv_n = 1.0 / n;
+        const double inv = 1.0 / s, inv_m = 1.0 / sm;
         const bool ok_m = sm > 0.0 && std::isfinite(sm);
-        for (int j = 0; j < 4; ++j) p[j] = share(t[j], tm[j], inv, inv_m, ok_m, inv_n);
+        for (int j = 0; j < 4; ++j) p[j] = share(t[j], tm[j], inv, inv_m, ok_m);
         return;
     }
     double e = 0.0;
@@ -239,7 +240,7 @@ struct Item {
 
 // Where every light of a node surely emits, for its smallest importance (LightTreeNode::cos_b):
 // kind 0 nowhere (a light may give nothing anywhere: two-sided emitters, IES profiles, cones
-// of every direction), 1 every way alike (point lamps), 2 within theta_b - theta_s of the
+// of every direction; inner nodes of kind-1 lights), 1 every way alike (a point lamp), 2 within theta_b - theta_s of the
 // node's axis (each light within theta_b of its own axis, those within theta_s of the node's).
 struct Reach {
     int kind;
@@ -343,7 +344,10 @@ struct Builder {
     // the narrowest theta_b; lights alike every way add no condition.
     static Reach merge_reach(const Cone& cone, const Cone& lc, const Reach& lr, const Cone& rc, const Reach& rr) {
         if (lr.kind == 0 || rr.kind == 0) return {0, 0.0, 0.0};
-        if (lr.kind == 1 && rr.kind == 1) return {1, 0.0, 0.0};
+        // (lights alike every way count at leaves only: an inner node of them, whose sphere holds
+        // the points near it, would count 0 there and more than 0 far away, and so send the
+        // near points' samples away; Cycles' inner node of point lights counts 0 everywhere)
+        if (lr.kind == 1 && rr.kind == 1) return {0, 0.0, 0.0};
         Reach r{2, 0.0, kPi};
         const Cone* cs[2] = {&lc, &rc};
         const Reach* rs[2] = {&lr, &rr};
@@ -738,20 +742,19 @@ inline __attribute__((always_inline)) void pick_rows(TargetRows t, TargetRows tm
         std::memcpy(&uv, u + i, sizeof(D4));
         std::memcpy(&lov, lo + i, sizeof(D4));
         std::memcpy(&wv, w + i, sizeof(D4));
-        D4 s = D4{} + 0.0, sm = D4{} + 0.0, n = D4{} + 0.0;
+        D4 s = D4{} + 0.0, sm = D4{} + 0.0;
         for (int j = 0; j < 4; ++j) {
             s += tj[j];
             sm += mj[j];
-            n += tj[j] > 0.0 ? D4{} + 1.0 : D4{} + 0.0;
         }
         const L4 ok = (s > 0.0) & (s < D4{} + INFINITY);  // s > 0 and finite
         const L4 ok_m = (sm > 0.0) & (sm < D4{} + INFINITY);
-        const D4 inv = 1.0 / s, inv_m = 1.0 / sm, inv_n = 1.0 / n;
+        const D4 inv = 1.0 / s, inv_m = 1.0 / sm;
         D4 p[4], run[5];
         run[0] = lov;
         for (int j = 0; j < 4; ++j) {  // share()'s operations
-            const D4 even = tj[j] > 0.0 ? inv_n : D4{} + 0.0;
-            p[j] = ok ? 0.5 * (tj[j] * inv + (ok_m ? mj[j] * inv_m : even)) : D4{} + pe[j];
+            const D4 by_max = tj[j] * inv;
+            p[j] = ok ? (ok_m ? 0.5 * (by_max + mj[j] * inv_m) : by_max) : D4{} + pe[j];
             run[j + 1] = run[j] + wv * p[j];
         }
         L4 last = L4{}, first = L4{} + 4;
@@ -769,16 +772,15 @@ inline __attribute__((always_inline)) void pick_rows(TargetRows t, TargetRows tm
         for (int a = 0; a < 4; ++a) pick[i + size_t(a)] = uint8_t(k[a]);
     }
     for (; i < m; ++i) {  // the last 1-3 as probs_of and pick_of
-        double s = 0.0, sm = 0.0, n = 0.0;
+        double s = 0.0, sm = 0.0;
         for (int j = 0; j < 4; ++j) {
             s += t[j][i];
             sm += tm[j][i];
-            n += t[j][i] > 0.0 ? 1.0 : 0.0;
         }
         double p[4];
         const bool ok = s > 0.0 && std::isfinite(s), ok_m = sm > 0.0 && std::isfinite(sm);
-        const double inv = 1.0 / s, inv_m = 1.0 / sm, inv_n = 1.0 / n;
-        for (int j = 0; j < 4; ++j) p[j] = ok ? share(t[j][i], tm[j][i], inv, inv_m, ok_m, inv_n) : pe[j];
+        const double inv = 1.0 / s, inv_m = 1.0 / sm;
+        for (int j = 0; j < 4; ++j) p[j] = ok ? share(t[j][i], tm[j][i], inv, inv_m, ok_m) : pe[j];
         double run[5];
         run[0] = lo[i];
         for (int j = 0; j < 4; ++j) run[j + 1] = run[j] + w[i] * p[j];

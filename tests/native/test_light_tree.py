@@ -134,11 +134,10 @@ def smallest_importance(center, radius, energy, P, axis=None, one_sided=False, a
 
 def cycles_split(imax, imin):
     """Cycles' get_left_probability for each light of a split: the mean of the shares by the
-    largest and by the smallest importances; where the smallest sum to 0, the second share even
-    among the lights whose largest is > 0."""
+    largest and by the smallest importances; where the smallest sum to 0, the share by the
+    largest alone (Cycles' even share there is not taken: README)."""
     imax, imin = np.asarray(imax, np.float64), np.asarray(imin, np.float64)
-    second = imin / imin.sum() if imin.sum() > 0 else (imax > 0) / (imax > 0).sum()
-    return 0.5 * (imax / imax.sum() + second)
+    return 0.5 * (imax / imax.sum() + imin / imin.sum()) if imin.sum() > 0 else imax / imax.sum()
 
 
 @pytest.mark.parametrize("alike", [False, True])
@@ -229,14 +228,14 @@ def test_one_light_and_coincident_lights():
     assert one.members == 1 and one.nodes == 1
     key, prob = one.sample(np.zeros((3, 3), F32), np.array([0.0, 0.5, 1.0]))
     assert key.tolist() == [5, 5, 5] and prob.tolist() == [1.0, 1.0, 1.0]
-    # the same place, energies 1 : 3: a point anywhere splits them by Cycles' mean of 1 : 3 (the
-    # largest importances) and 1 : 1 (the smallest, 0: two-sided emitters may give nothing), P
-    # on them too; lights alike every way (cos_e -1) by 1 : 3 both ways away from them
+    # the same place, energies 1 : 3: a point anywhere splits them 1 : 3 (P on them too), by the
+    # largest importances alone (the smallest are 0: two-sided emitters may give nothing), and
+    # as lights alike every way (cos_e -1) by the mean of 1 : 3 and 1 : 3
     same = tree_of(np.zeros((3, 2)), 0.0, [1.0, 3.0])
-    for P in (np.zeros((3, 1), F32), np.ones((3, 1), F32)):
-        np.testing.assert_allclose(same.pdf(np.repeat(P, 2, 1), np.array([0, 1])), [0.375, 0.625])
     alike = tree_of(np.zeros((3, 2)), 0.0, [1.0, 3.0], cos_e=[-1.0, -1.0])
-    np.testing.assert_allclose(alike.pdf(np.ones((3, 2), F32), np.array([0, 1])), [0.25, 0.75])
+    for P in (np.zeros((3, 1), F32), np.ones((3, 1), F32)):
+        np.testing.assert_allclose(same.pdf(np.repeat(P, 2, 1), np.array([0, 1])), [0.25, 0.75])
+        np.testing.assert_allclose(alike.pdf(np.repeat(P, 2, 1), np.array([0, 1])), [0.25, 0.75])
 
 
 @pytest.mark.parametrize('bad, message', [
