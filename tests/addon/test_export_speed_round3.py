@@ -87,6 +87,9 @@ def _old_spot_bounds(spot):
     from addon.lights.base import F32, Bounds
     from addon.lights.point import PointLight
     b = PointLight.bounds(spot)
+    # (a spot of a hemisphere or more: every direction, but not alike every way as a point lamp's
+    # cos_e -1 says: cos_e 0, so the light tree's smallest importance does not count it)
+    b = Bounds(b.lo, b.hi, b.axis, b.cos_o, 0.0, b.energy, b.radius)
     half = float(np.arccos(np.clip(float(spot.cos_half), -1.0, 1.0)))
     if half >= np.pi / 2 - 1e-3:
         return b
