@@ -124,9 +124,6 @@ class Environment:
     # or (h, w, 3+) uint8: an 8-bit image's bytes, k the value k / 255 (alpha unread);
     # None: `pixels` are blended. `pixels` are the decoded texels either way
     encoded: Optional[np.ndarray] = None
-    # a Single Scattering Sky Texture's map: its ground (below the horizon) fades as Cycles'
-    # kernel publishes it, where Cycles 5.0.1 renders it darker (export/sky.py says so)
-    sky_ground_fade: bool = False
     # a hashable name of `pixels`' content where they stay the same from frame to frame (a Sky
     # Texture's kept map: its parameters), so its native map is kept (lights/envkeep.py); None:
     # built each frame

@@ -5,9 +5,10 @@ environment light. No bpy here: the export layer (export/sky.py) reads the node.
 - Multiple Scattering (the 5.0 default; García Liñán's 4-wavelength model with a fitted
   multiple-scattering term) and Single Scattering (the former Nishita, 21 wavelengths):
   Cycles precomputes a 512 x 256 XYZ table per render (rows: elevation through a square-law
-  warp that gives the horizon more rows; columns: azimuth from the sun, mirrored), then per
+  warp that gives the horizon more rows, the ground below; columns: azimuth from the sun,
+  mirrored; single scattering's ground is its horizon row faded to black), then per
   direction reads it bilinearly (extend), converts XYZ to scene linear RGB (negatives to 0),
-  fades the single-scattering ground to black, and adds the sun disc: its radiance at the
+  and adds the sun disc: its radiance at the
   disc's lowest and highest points (the transmittance toward the sun / the disc's solid
   angle), blended by elevation, with limb darkening.
 - The tables are computed here as Cycles computes them, vectorised: everything along a view
@@ -388,11 +389,12 @@ def _ss_optical_depth(radius, cos_dir):
 
 def single_scattering_table(sun_elevation, altitude, air, aerosol, ozone):
     """(256, 512, 3) XYZ table of the single-scattering sky, as
-    SKY_single_scattering_precompute_texture (the lower half black; altitude in metres)."""
+    SKY_single_scattering_precompute_texture (altitude in metres): the upper half from the
+    horizon row (128) up, the lower half that horizon row faded to black (_faded_ground)."""
     alt = np.clip(altitude, 1.0, 59999.0)
     half_w, half_h = TABLE_W // 2, TABLE_H // 2
     out = np.zeros((TABLE_H, half_w, 3))
-    ys = np.arange(half_h + 1, TABLE_H)
+    ys = np.arange(half_h, TABLE_H)
     lat = np.pi / 2 * (ys / half_h - 1.0) ** 2                 # (this table's rows are not centred)
     lon = 2.0 * np.pi / TABLE_W * np.arange(half_w) - np.pi
     sun = np.array([np.cos(sun_elevation), 0.0, np.sin(sun_elevation)])
@@ -428,7 +430,23 @@ def single_scattering_table(sun_elevation, altitude, air, aerosol, ozone):
         spectrum = (ray_phase[i][:, None] * rayleigh * _SS_RAYLEIGH + mie_phase[i][:, None] * mie * _SS_MIE) \
             * _SS_IRRADIANCE
         out[ys[i]] = spectrum @ _SS_CMF
-    return np.concatenate([out, out[:, ::-1]], axis=1).astype(np.float32)
+    table = np.concatenate([out, out[:, ::-1]], axis=1).astype(np.float32)
+    table[:half_h] = _faded_ground(table[half_h], half_h)
+    return table
+
+
+def _faded_ground(horizon, half_h):
+    """(half_h, width, 3) the single-scattering table's lower rows: the horizon row x
+    (1 - 2.5 z)^3, z the sine of the row's (mirrored) warped elevation, black from z 0.4
+    (-23.6 degrees), in float32 as intern/sky fills them. Cycles 5.0.1 reads the ground from
+    these rows as it reads Multiple Scattering's (the warp undone, bilinear): the kernel's
+    own fade of the row at y 0.508 by the view's z, which DACRT had used, rendered the ground
+    2-25% brighter than Cycles (the further below the horizon, the brighter)."""
+    f32 = np.float32
+    y = np.arange(half_h, dtype=f32)
+    z = np.sin(f32(np.pi / 2) * (y / f32(half_h) - f32(1.0)) ** 2)
+    fade = np.where(z < f32(0.4), (f32(1.0) - z * f32(2.5)) ** 3, f32(0.0)).astype(f32)
+    return horizon[None] * fade[:, None, None]
 
 
 def single_scattering_sun(sun_elevation, diameter, altitude, air, aerosol):
@@ -518,14 +536,10 @@ def _table_lookup(table, x, y):
             + (table[y1, x0] * (1 - tx) + table[y1, x1] * tx) * ty)
 
 
-def _row_coordinate(sky, elevation, z):
-    """(table y, fade) of directions at `elevation` and z: the row warp undone; the single-
-    scattering ground reads the horizon row (y 0.508) faded to black by z = -0.4."""
-    if sky.multiple:
-        return np.sqrt(np.abs(elevation) / (np.pi / 2)) * np.where(elevation < 0, -0.5, 0.5) + 0.5, np.ones_like(z)
-    below = z < 0
-    fade = np.where(below, np.where(z < -0.4, 0.0, np.maximum(1.0 + z * 2.5, 0.0) ** 3), 1.0)
-    return np.where(below, 0.508, np.sqrt(np.maximum(elevation, 0.0) / (np.pi / 2)) * 0.5 + 0.5), fade
+def _row_coordinate(elevation):
+    """Table y of directions at `elevation`: the row warp undone (both types; the single-
+    scattering table's lower half holds its faded ground)."""
+    return np.sqrt(np.abs(elevation) / (np.pi / 2)) * np.where(elevation < 0, -0.5, 0.5) + 0.5
 
 
 def _column_coordinate(sky, phi):
@@ -556,10 +570,10 @@ def radiance(sky, dirs, xyz_to_rgb=XYZ_TO_REC709):
     m = np.asarray(xyz_to_rgb, np.float64).T
     elevation = np.pi / 2 - np.arccos(np.clip(dirs[..., 2], -1.0, 1.0))
     phi = np.arctan2(dirs[..., 1], dirs[..., 0])
-    y, fade = _row_coordinate(sky, elevation, dirs[..., 2])
+    y = _row_coordinate(elevation)
     xyz = _table_lookup(sky.table(), _column_coordinate(sky, phi), y)
     sun = _sun_xyz(sky, dirs, elevation, sky.sun_pixels())
-    return np.maximum(xyz @ m, 0.0) * fade[..., None] + np.maximum(sun @ m, 0.0)
+    return np.maximum(xyz @ m, 0.0) + np.maximum(sun @ m, 0.0)
 
 
 def _equirect_dirs(u, v):
@@ -586,10 +600,9 @@ def equirect(sky, width=2048, xyz_to_rgb=XYZ_TO_REC709, sun_samples=16, chain=No
     table = sky.table().astype(np.float64) @ m
     v = (np.arange(height) + 0.5) / height
     u = (np.arange(width) + 0.5) / width
-    z = np.cos((1.0 - v) * np.pi)
     elevation = np.pi / 2 - (1.0 - v) * np.pi
     phi = np.angle(np.exp(1j * (0.5 - u) * 2 * np.pi))            # wrapped as atan2 returns it
-    rows_y, fade = _row_coordinate(sky, elevation, z)
+    rows_y = _row_coordinate(elevation)
     by_row = _rows_of_table(table, rows_y)
     # By the horizon the table's warped rows are far finer than the map's (0.0014 degrees at
     # the horizon, 0.07 three rows away), and at a low Altitude the sky stays bright down to
@@ -604,13 +617,11 @@ def equirect(sky, width=2048, xyz_to_rgb=XYZ_TO_REC709, sun_samples=16, chain=No
         n = _ROW_POINTS * max(1, 2048 // height)          # elevations 0.0014 degrees apart or less
         sub = (near[:, None] + (np.arange(n) + 0.5) / n) / height
         el_sub = np.pi / 2 - (1.0 - sub) * np.pi
-        y_sub, fade_sub = _row_coordinate(sky, el_sub, np.sin(el_sub))
-        weight = (np.cos(el_sub) * fade_sub)[..., None, None]          # solid angle x fade
+        y_sub = _row_coordinate(el_sub)
+        weight = np.cos(el_sub)[..., None, None]                        # solid angle
         mean = (_rows_of_table(table, y_sub.ravel()).reshape(weight.shape[:2] + table.shape[1:])
                 * weight).sum(axis=1) / np.cos(el_sub).sum(axis=1)[:, None, None]
         by_row[near] = mean.astype(np.float32)
-        fade = fade.copy()
-        fade[near] = 1.0
     px = _column_coordinate(sky, phi) * TABLE_W - 0.5
     ix = np.floor(px)
     tx = (px - ix)[None, :, None].astype(np.float32)
@@ -620,7 +631,6 @@ def equirect(sky, width=2048, xyz_to_rgb=XYZ_TO_REC709, sun_samples=16, chain=No
     img *= 1 - tx
     img += by_row[:, np.clip(ix + 1, 0, TABLE_W - 1)] * tx
     np.maximum(img, 0.0, out=img)
-    img *= fade.astype(np.float32)[:, None, None]
     done = np.zeros((height, width), bool)
     if sky.sun_disc and sky.sun_intensity > 0:
         done = _add_sun(sky, img, width, height, m, sun_samples, chain)

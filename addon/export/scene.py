@@ -29,7 +29,6 @@ from .missinglibraries import missing_library_messages
 from .motion import MotionCheck, motion_blur_message
 from .placement import Placement
 from .aovs import shader_aovs
-from .sky import ground_seen_said
 from .settings import clamp_direct_said, cycles_glossy_messages, export_settings, glossy_in_diffuse_passes
 from .strands import (StrandSource, hair_arrays, hair_systems, read_strands, strand_kind, tessellate,
                       triangle_count)
@@ -340,11 +339,6 @@ class Exporter:
         if said:
             self.messages.append(('WARNING', f"world approximated: {said}"))
         self._summarize(geometry, world, environment, camera_world)
-        seen_env = camera_world[1] if camera_world is not None else environment
-        said = ground_seen_said(seen_env, camera, settings,
-                                bool(world_visibility(self.world) & sd.VIS_CAMERA))
-        if said:
-            self.messages.append(('WARNING', said))
         used = set(self._used.tolist())
         said = clamp_direct_said(settings, [m.name for i, m in enumerate(self.materials.materials)
                                             if i in used and np.any(m.emission > 0) and m.emission_sampling != 'NONE'],

@@ -10,7 +10,6 @@ import numpy as np
 from .. import scenedata as sd
 from .. import sky as model
 from .. import skyanalytic
-from ..lights import envkeep
 from ..mapping import environment_rotation
 from .colorspaces import xyz_to_scene_linear
 
@@ -103,39 +102,8 @@ def sky_environment(node, strength, reasons, chain=None):
     rotation = environment_rotation(node, mapped, vector=vector is not None and vector.enabled)
     reasons.extend(f"Sky Texture '{node.name}': {r}" for r in mapped)
     env = sd.Environment(img, np.full(3, strength, np.float32), rotation, 'Linear',
-                         sky_ground_fade=isinstance(sky, model.Sky) and not sky.multiple,
                          texels_key=None if chain is not None else ('sky', sky, m))
     return np.zeros(3, np.float32), env
-
-
-def ground_seen_said(env, camera, settings, camera_sees_world):
-    """The report's text when the camera sees a Single Scattering sky's fading ground (map
-    directions with -0.4 < z < 0; below that both engines are black), else None. env: the
-    Environment camera rays see; camera: scenedata.Camera. Tested on a grid of 65 x 65 rays
-    over the rendered region (a perspective or orthographic view's corners decide it exactly;
-    a panorama's grid samples it)."""
-    if env is None or not env.sky_ground_fade or not camera_sees_world or settings.film_transparent:
-        return None
-    if not (np.any(env.strength > 0) and envkeep.any_positive(env)):
-        return None
-    from ..camera import CameraModel      # (the numpy camera model: the rays Cycles casts)
-    try:
-        cam = CameraModel(camera)
-    except ValueError:      # (a camera the render refuses says so itself; nothing to add here)
-        return None
-    x0, y0, x1, y1 = cam.region
-    rx, ry = np.meshgrid(np.linspace(x0, x1, 65), np.linspace(y0, y1, 65))
-    rx, ry = rx.ravel(), ry.ravel()
-    _, dirs, _ = cam.rays(rx, ry)
-    z = (np.asarray(env.to_map, np.float64) @ np.asarray(dirs, np.float64))[2]
-    seen = cam.sees(rx, ry)
-    band = (z < 0.0) & (z > -0.4) & (True if seen is None else seen)
-    if not band.any():
-        return None
-    # (objects may hide that ground: said as where the camera sees it, not that it does)
-    return ("world: where the camera sees the Single Scattering Sky Texture's ground (below its horizon), "
-            "DACRT fades it as Cycles' sky kernel publishes it; Cycles 5.0.1 renders it 2-25% darker "
-            "there (the further below the horizon, the darker)")
 
 
 @lru_cache(maxsize=4)

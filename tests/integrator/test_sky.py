@@ -155,8 +155,14 @@ def _ss_ray(x, y, sun_elevation, altitude=100.0, dens=(1.0, 1.0, 1.0)):
 
 def test_single_scattering_table_is_the_per_ray_march():
     table = model.single_scattering_table(E15, 100.0, 1.0, 1.0, 1.0)
-    assert not table[:129].any()                       # the lower half (and the horizon row) black
-    for x, y in ((0, 200), (100, 130), (255, 129), (37, 255), (255, 160)):
+    # the lower half: the horizon row x (1 - 2.5 z)^3, z the sine of the row's mirrored
+    # elevation, black from z 0.4 (it had been black, its ground faded per view direction)
+    for y in (0, 40, 62, 63, 90, 127):
+        z = math.sin(math.pi / 2 * (y / 128 - 1) ** 2)
+        fade = (1 - 2.5 * z) ** 3 if z < 0.4 else 0.0
+        np.testing.assert_allclose(table[y], table[128] * fade, rtol=5e-5)    # (float32)
+    assert not table[:63].any() and table[63:128].all()
+    for x, y in ((0, 200), (100, 130), (255, 129), (37, 255), (255, 160), (20, 128)):
         ref = _ss_ray(x, y, E15)
         np.testing.assert_allclose(table[y, x], ref, rtol=2e-5)
         # the other half mirrors the computed one (column 256 is 255's, not the sun's own azimuth)

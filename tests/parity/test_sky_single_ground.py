@@ -1,0 +1,58 @@
+"""The Single Scattering sky's ground (below the horizon) as Cycles 5.0.1 renders it.
+
+intern/sky fills the lower half of the single-scattering table with its horizon row x
+(1 - 2.5 z)^3 (z the sine of the row's warped elevation, black from 0.4), and Cycles 5.0.1
+reads the ground from those rows as it reads Multiple Scattering's (the warp undone, bilinear).
+DACRT had faded the row at y 0.508 by the view's own z (the kernel's published branch): its
+ground rendered 1.01x Cycles' just below the horizon to 1.25x at -19.5 degrees (an
+equirectangular view, row by row), a camera 10-40 degrees down 1.08x.
+
+A 48 x 36 camera 12 degrees down (the horizon near the top, -27 degrees at the bottom): each
+channel's mean over bands of 4 rows within 1% of Cycles' where it is brighter than 1/50 of its
+brightest band (the fade's tail, darker, is noise against it); the whole image's mean within
+0.5%."""
+import math
+import os
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from tests.addon import scenes
+
+from . import rendering
+
+pytestmark = pytest.mark.usefixtures('parity_addon')
+
+
+@pytest.mark.parametrize('sun, air', ((30.0, 1.0), (5.0, 2.5)))
+def test_ground_below_the_horizon(sun, air, tmp_path):
+    import bpy
+    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
+    sc = bpy.context.scene
+    sc.render.resolution_x, sc.render.resolution_y, sc.render.resolution_percentage = 48, 36, 100
+    vs = sc.view_settings
+    vs.view_transform, vs.look, vs.exposure, vs.gamma = 'Standard', 'None', 0.0, 1.0
+    scenes.camera(location=(0, 0, 0), rotation=(math.radians(78), 0, 0), lens=50)
+    w, nt, out = scenes.world_tree()
+    bg = nt.nodes.new('ShaderNodeBackground')
+    nt.links.new(bg.outputs[0], out.inputs['Surface'])
+    sky = nt.nodes.new('ShaderNodeTexSky')
+    sky.sky_type, sky.sun_elevation, sky.air_density = 'SINGLE_SCATTERING', math.radians(sun), air
+    nt.links.new(sky.outputs[0], bg.inputs['Color'])
+    rendering.fair_scene_settings(sc)
+    rows = {}
+    for engine, setup in (('CYCLES', rendering.set_cycles), ('DACRT', rendering.set_dacrt)):
+        setup(sc, SimpleNamespace(cycles_samples=16, dacrt_samples=16, bounces=1, clamp=(0.0, 0.0),
+                                  filter_type='BLACKMAN_HARRIS', filter_width=1.5), 0)
+        img = rendering.render_combined(sc, os.path.join(tmp_path, f'{engine}.exr'))
+        rows[engine] = img[..., :3].astype(np.float64).mean(axis=1)          # (rows, 3), row 0 at the bottom
+    c, d = rows['CYCLES'], rows['DACRT']
+    bands = [slice(i, i + 4) for i in range(0, 36, 4)]
+    cb, db = (np.array([x[b].mean(0) for b in bands]) for x in (c, d))      # (bands, 3)
+    lit = cb > cb.max(axis=0) / 50          # (a low sun in dense air leaves the blue black)
+    ratio = db[lit] / cb[lit]
+    assert lit.sum() >= 10 and np.abs(ratio - 1).max() < 0.01, (lit.sum(), (db / cb).round(4).tolist())
+    seen = c.mean(0) > 0
+    ratio = d.mean(0)[seen] / c.mean(0)[seen]
+    assert np.abs(ratio - 1).max() < 0.005, ratio.round(4).tolist()
