@@ -2,6 +2,8 @@
 checked against closed-form cases and an independent linear-solve implementation, so that a
 disagreement with dacrt means a tracer bug. (No dacrt needed here.)"""
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -93,6 +95,41 @@ def test_chunking_does_not_change_the_answer(monkeypatch):
     parts = reference.trace(v, t, o, d, tf)
     for f in ("t", "prim", "u", "v", "t2", "robust_t", "occluded", "occluded_robust"):
         np.testing.assert_array_equal(getattr(whole, f), getattr(parts, f), err_msg=f)
+
+
+def test_skipping_far_runs_of_triangles_does_not_change_the_answer(monkeypatch):
+    """Large meshes skip runs of triangles far from each ray (reference._Blocks); forced onto a
+    14,400-triangle torus (rays from inside its tube, half aimed at vertices, some with a finite
+    tfar, and as many from outside at its vertices) and a mesh with non-finite vertices, every
+    field must equal the dense cull's."""
+    rng = np.random.default_rng(3)
+    v, t = scenes.torus(1.0, 0.35, 120, 60)
+    n = 400
+    a = rng.uniform(0, 2 * np.pi, n)
+    o = (np.stack([np.cos(a), np.sin(a), np.zeros(n)], 1) + rng.uniform(-0.2, 0.2, (n, 3))).astype(np.float32)
+    d = np.where(rng.uniform(size=(n, 1)) < 0.5, v[rng.integers(0, len(v), n)] - o,
+                 rng.normal(size=(n, 3))).astype(np.float32)
+    outside = rng.uniform(-2, 2, (n, 3)).astype(np.float32)
+    o, d = np.concatenate([o, outside]), np.concatenate([d, v[rng.integers(0, len(v), n)] - outside])
+    n *= 2
+    tf = np.where(rng.uniform(size=n) < 0.7, np.inf, rng.uniform(0, 1, n)).astype(np.float32)
+    broken = v.astype(np.float32).copy()
+    broken[5], broken[9, 1] = np.inf, np.nan
+    for verts in (v, broken):
+        dense = reference.trace(verts, t, o, d, tf)
+        monkeypatch.setattr(reference, "BLOCKED_TRIANGLES", 1)
+        blocked = reference.trace(verts, t, o, d, tf)
+        monkeypatch.undo()
+        for f in dataclasses.fields(dense):
+            np.testing.assert_array_equal(getattr(dense, f.name), getattr(blocked, f.name), err_msg=f.name)
+    # and the runs do skip triangles here, or the comparison would prove nothing
+    mesh = reference.Mesh.from_arrays(v, t)
+    centre = mesh.v0 + (mesh.e1 + mesh.e2) / 3.0
+    radius = np.max(np.linalg.norm(np.stack([mesh.v0, mesh.v0 + mesh.e1, mesh.v0 + mesh.e2], 1)
+                                   - centre[:, None], axis=2), axis=1)
+    dhat = (d / np.linalg.norm(d, axis=1)[:, None]).astype(np.float64)
+    near = reference._Blocks(centre, radius).near(o[:1].astype(np.float64), dhat[:1], np.array([1e-4]))
+    assert 0 < len(near) < len(t) / 2
 
 
 def _edge_use(tris):
