@@ -32,7 +32,7 @@ def blended_map(parts, directions_of, width, factor=None):
     by 1 - f and the second by f, at the texel centres of an equirectangular map
     (directions_of(width) -> (width / 2, width, 3) unit directions) at least as wide as `width` and
     as every part's map (an image keeps its detail; a rotated one is resampled, blended between its
-    texels). A Single Scattering sky in a part keeps its ground's said fade."""
+    texels)."""
     maps = [env for _, env in parts if env is not None]
     width = max([int(width)] + [int(np.shape(env.pixels)[1]) for env in maps])
     dirs = directions_of(width)
@@ -45,5 +45,4 @@ def blended_map(parts, directions_of, width, factor=None):
             value = value + environment_radiance(env, d)
         img += value if f is None else (1.0 - f if i == 0 else f) * value
     img = np.maximum(np.nan_to_num(img, nan=0.0, posinf=0.0, neginf=0.0), 0.0)
-    return sd.Environment(img.reshape(dirs.shape).astype(np.float32), np.ones(3, np.float32),
-                          sky_ground_fade=any(env.sky_ground_fade for env in maps))
+    return sd.Environment(img.reshape(dirs.shape).astype(np.float32), np.ones(3, np.float32))
