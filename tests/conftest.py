@@ -52,6 +52,18 @@ def _long(item):
     return item.get_closest_marker("long") is not None or item.get_closest_marker("stress") is not None
 
 
+def _controller_dist(argv):
+    """The --dist mode the xdist controller was started with (its argv reaches the workers as
+    workerinput["mainargv"]; a worker's own config says dist "no")."""
+    mode = "load"                                  # xdist's default with -n
+    for i, arg in enumerate(argv):
+        if arg == "--dist" and i + 1 < len(argv):
+            mode = argv[i + 1]
+        elif arg.startswith("--dist="):
+            mode = arg.split("=", 1)[1]
+    return mode
+
+
 @pytest.hookimpl(trylast=True)      # after pytest's fixture grouping and the -m deselection
 def pytest_collection_modifyitems(config, items):
     """Under xdist's worksteal each worker first gets one contiguous share of the collection
@@ -60,8 +72,9 @@ def pytest_collection_modifyitems(config, items):
     front of those shares and the other tests fill the rest in their usual order: every worker
     starts on long tests, and what is left to steal, or to wait for at the end, is short.
     Every worker orders the same collection the same way, as xdist requires."""
-    workers = getattr(config, "workerinput", {}).get("workercount", 1)
-    if workers < 2 or config.getoption("dist", "no") != "worksteal":
+    workerinput = getattr(config, "workerinput", {})
+    workers = workerinput.get("workercount", 1)
+    if workers < 2 or _controller_dist(workerinput.get("mainargv", ())) != "worksteal":
         return
     long = [item for item in items if _long(item)]
     if not long:
