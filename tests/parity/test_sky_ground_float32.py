@@ -13,15 +13,11 @@ A camera at the origin looks straight down (a 100-degree view: elevations -90 to
 the world is only the sky. Means of 9 x 9-pixel blocks (64 samples) per channel within 0.5% of Cycles'
 (measured within 0.03%)."""
 import math
-import os
-from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
-from tests.addon import scenes
-
-from . import rendering
+from .skyview import both_engines, sky_view
 
 pytestmark = pytest.mark.usefixtures('parity_addon')
 
@@ -32,27 +28,11 @@ pytestmark = pytest.mark.usefixtures('parity_addon')
     (5.0, 2.0, 0.5, 1.0, 45.0),
 ])
 def test_ground_seen_from_a_low_altitude_agrees_with_cycles(altitude, air, dust, ozone, elevation, tmp_path):
-    import bpy
-    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
-    sc = bpy.context.scene
-    sc.render.resolution_x, sc.render.resolution_y, sc.render.resolution_percentage = 36, 36, 100
-    cam = scenes.camera(location=(0, 0, 0), rotation=(0, 0, 0), lens=15.0)
+    cam = sky_view((36, 36), 0.0, lens=15.0, sky_type='MULTIPLE_SCATTERING', sun_disc=False,
+                   sun_elevation=math.radians(elevation), sun_rotation=1.3, altitude=altitude,
+                   air_density=air, aerosol_density=dust, ozone_density=ozone)
     cam.data.sensor_width = 36.0
-    w, nt, out = scenes.world_tree()
-    bg = nt.nodes.new('ShaderNodeBackground')
-    nt.links.new(bg.outputs[0], out.inputs['Surface'])
-    sky = nt.nodes.new('ShaderNodeTexSky')
-    sky.sky_type, sky.sun_disc = 'MULTIPLE_SCATTERING', False
-    sky.sun_elevation, sky.sun_rotation, sky.altitude = math.radians(elevation), 1.3, altitude
-    sky.air_density, sky.aerosol_density, sky.ozone_density = air, dust, ozone
-    nt.links.new(sky.outputs[0], bg.inputs['Color'])
-    rendering.fair_scene_settings(sc)
-    img = {}
-    for engine, setup in (('CYCLES', rendering.set_cycles), ('DACRT', rendering.set_dacrt)):
-        setup(sc, SimpleNamespace(cycles_samples=64, dacrt_samples=64, bounces=1, clamp=(0.0, 0.0),
-                                  filter_type='BOX', filter_width=1.0), 0)
-        rgb = rendering.render_combined(sc, os.path.join(tmp_path, f'{engine}.exr'))[..., :3]
-        img[engine] = rgb.astype(np.float64).reshape(4, 9, 4, 9, 3).mean(axis=(1, 3))
+    img = {e: rgb.reshape(4, 9, 4, 9, 3).mean(axis=(1, 3)) for e, rgb in both_engines(tmp_path, 64, 'BOX', 1.0).items()}
     ratio = img["DACRT"] / img["CYCLES"]
     err = np.abs(ratio - 1).max(axis=(0, 1))
     assert err.max() < 0.005, (err.round(4).tolist(), ratio.min(axis=(0, 1)).round(4).tolist(),

@@ -13,42 +13,20 @@ channel's mean over bands of 4 rows within 1% of Cycles' where it is brighter th
 brightest band (the fade's tail, darker, is noise against it); the whole image's mean within
 0.5%."""
 import math
-import os
-from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
-from tests.addon import scenes
-
-from . import rendering
+from .skyview import both_engines, sky_view
 
 pytestmark = pytest.mark.usefixtures('parity_addon')
 
 
 @pytest.mark.parametrize('sun, air', ((30.0, 1.0), (5.0, 2.5)))
 def test_ground_below_the_horizon(sun, air, tmp_path):
-    import bpy
-    bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
-    sc = bpy.context.scene
-    sc.render.resolution_x, sc.render.resolution_y, sc.render.resolution_percentage = 48, 36, 100
-    vs = sc.view_settings
-    vs.view_transform, vs.look, vs.exposure, vs.gamma = 'Standard', 'None', 0.0, 1.0
-    scenes.camera(location=(0, 0, 0), rotation=(math.radians(78), 0, 0), lens=50)
-    w, nt, out = scenes.world_tree()
-    bg = nt.nodes.new('ShaderNodeBackground')
-    nt.links.new(bg.outputs[0], out.inputs['Surface'])
-    sky = nt.nodes.new('ShaderNodeTexSky')
-    sky.sky_type, sky.sun_elevation, sky.air_density = 'SINGLE_SCATTERING', math.radians(sun), air
-    nt.links.new(sky.outputs[0], bg.inputs['Color'])
-    rendering.fair_scene_settings(sc)
-    rows = {}
-    for engine, setup in (('CYCLES', rendering.set_cycles), ('DACRT', rendering.set_dacrt)):
-        setup(sc, SimpleNamespace(cycles_samples=16, dacrt_samples=16, bounces=1, clamp=(0.0, 0.0),
-                                  filter_type='BLACKMAN_HARRIS', filter_width=1.5), 0)
-        img = rendering.render_combined(sc, os.path.join(tmp_path, f'{engine}.exr'))
-        rows[engine] = img[..., :3].astype(np.float64).mean(axis=1)          # (rows, 3), row 0 at the bottom
-    c, d = rows['CYCLES'], rows['DACRT']
+    sky_view((48, 36), 78.0, sky_type='SINGLE_SCATTERING', sun_elevation=math.radians(sun), air_density=air)
+    rows = {e: img.mean(axis=1) for e, img in both_engines(tmp_path, 16, 'BLACKMAN_HARRIS', 1.5).items()}
+    c, d = rows['CYCLES'], rows['DACRT']                        # (rows, 3), row 0 at the bottom
     bands = [slice(i, i + 4) for i in range(0, 36, 4)]
     cb, db = (np.array([x[b].mean(0) for b in bands]) for x in (c, d))      # (bands, 3)
     lit = cb > cb.max(axis=0) / 50          # (a low sun in dense air leaves the blue black)
