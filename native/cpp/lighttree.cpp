@@ -198,9 +198,9 @@ inline __attribute__((always_inline)) void probs_of(const LightTreeNode* nodes, 
         s += t[j];
         sm += tm[j];
     }
-    if (s > 0.0 && std::isfinite(s)) {
+    if (s > 0.0 && std::isfinite(s) && std::isfinite(1.0 / s)) {  // (a subnormal sum's inverse overflows)
         const double inv = 1.0 / s, inv_m = 1.0 / sm;
-        const bool ok_m = sm > 0.0 && std::isfinite(sm);
+        const bool ok_m = sm > 0.0 && std::isfinite(sm) && std::isfinite(inv_m);
         for (int j = 0; j < 4; ++j) p[j] = share(t[j], tm[j], inv, inv_m, ok_m);
         return;
     }
@@ -747,9 +747,10 @@ inline __attribute__((always_inline)) void pick_rows(TargetRows t, TargetRows tm
             s += tj[j];
             sm += mj[j];
         }
-        const L4 ok = (s > 0.0) & (s < D4{} + INFINITY);  // s > 0 and finite
-        const L4 ok_m = (sm > 0.0) & (sm < D4{} + INFINITY);
         const D4 inv = 1.0 / s, inv_m = 1.0 / sm;
+        const D4 inf = D4{} + INFINITY;  // s > 0 and finite, its inverse too (not subnormal)
+        const L4 ok = (s > 0.0) & (s < inf) & (inv < inf);
+        const L4 ok_m = (sm > 0.0) & (sm < inf) & (inv_m < inf);
         D4 p[4], run[5];
         run[0] = lov;
         for (int j = 0; j < 4; ++j) {  // share()'s operations
@@ -778,8 +779,9 @@ inline __attribute__((always_inline)) void pick_rows(TargetRows t, TargetRows tm
             sm += tm[j][i];
         }
         double p[4];
-        const bool ok = s > 0.0 && std::isfinite(s), ok_m = sm > 0.0 && std::isfinite(sm);
         const double inv = 1.0 / s, inv_m = 1.0 / sm;
+        const bool ok = s > 0.0 && std::isfinite(s) && std::isfinite(inv),
+                   ok_m = sm > 0.0 && std::isfinite(sm) && std::isfinite(inv_m);
         for (int j = 0; j < 4; ++j) p[j] = ok ? share(t[j][i], tm[j][i], inv, inv_m, ok_m) : pe[j];
         double run[5];
         run[0] = lo[i];

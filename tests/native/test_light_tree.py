@@ -202,6 +202,32 @@ def test_a_faint_light_that_surely_reaches_keeps_half_the_samples():
     assert np.all(np.abs(freq - pdf) <= 5 * np.sqrt(pdf * (1 - pdf) / n))
 
 
+@pytest.mark.parametrize("case", ["subnormal_smallest", "subnormal_largest"])
+def test_energies_at_the_floor_far_away_keep_finite_probabilities(case):
+    """addon/lights/tree.py floors energies at 1e-300 so that a faint light stays reachable. Far
+    away, a sum of importances can then be subnormal, and its inverse overflows: the shares were
+    inf and NaN (the emitter never picked, the lamp's samples weighing 1/inf = 0). Now such a sum
+    counts as none (the largest alone, or the energies), on every path: pdf, sample, rows."""
+    if case == "subnormal_smallest":     # a two-sided emitter (smallest 0) and a point lamp (cos_e -1)
+        c = np.array([[1e5, 1e5], [0.0, 30.0], [0.0, 0.0]])
+        cos_e, E = np.array([0.0, -1.0]), np.array([1e-290, 1e-300])
+    else:                                # two point lamps at the floor, 1e6 m away
+        c = np.array([[1e6, 1e6 + 3.0], [0.0, 0.0], [0.0, 0.0]])
+        cos_e, E = np.array([-1.0, -1.0]), np.array([1e-300, 3e-300])
+    h = 0.01
+    tree = lamps.light_tree((c - h).astype(F32), (c + h).astype(F32), np.tile([[0.0], [0.0], [1.0]], (1, 2)),
+                            np.full(2, EVERY), cos_e, E, np.arange(2))
+    P = np.zeros((3, 1), F32)
+    pdf = tree.pdf(np.repeat(P, 2, 1), np.arange(2))
+    assert np.all(np.isfinite(pdf)) and np.all(pdf > 0.0), pdf
+    assert pdf.sum() == pytest.approx(1.0, abs=1e-12)
+    u = np.linspace(0.01, 0.99, 64)
+    for rows in (False, True):
+        got, prob = tree.sample(np.repeat(P, len(u), 1), u, rows=rows)
+        assert set(got.tolist()) == {0, 1}, (rows, got)
+        np.testing.assert_allclose(prob, pdf[got], rtol=1e-12)
+
+
 def test_a_light_facing_away_is_never_picked_and_delta_lights_always_can_be():
     """A one-sided light whose back faces the point gets probability 0 (a light sample there
     would be wasted); a point light, however faint and far, keeps a probability > 0 beside a
