@@ -7,23 +7,17 @@ sum). Part of the export layer."""
 import numpy as np
 
 from .. import scenedata as sd
-from ..texture import texture_lookup
+from ..lights.environment import EnvironmentLight
 
 
 def environment_radiance(env, d):
-    """(n, 3) float64 radiance of scenedata.Environment env at unit world directions d (n, 3): its
-    map looked up with its interpolation at the direction turned into its frame (to_map), as the
-    environment light maps it (lights/environment.py: u = 0.5 - atan2(y, x) / 2 pi, v = 1 - acos(z)
-    / pi; REPEAT in u and v, as Cycles' environment lookup), times its strength. A NaN or
-    infinite texel reads 0."""
-    pixels = env.pixels
-    texels = np.nan_to_num(np.asarray(pixels[..., :3], np.float32), nan=0.0, posinf=0.0, neginf=0.0)
-    m = np.asarray(d, np.float64) @ np.asarray(env.to_map, np.float64).T
-    u = 0.5 - np.arctan2(m[:, 1], m[:, 0]) / (2 * np.pi)
-    v = 1.0 - np.arccos(np.clip(m[:, 2], -1.0, 1.0)) / np.pi
-    rgb = texture_lookup(np.ascontiguousarray(texels), u.astype(np.float32), v.astype(np.float32),
-                         env.interpolation, 'REPEAT')
-    return np.asarray(rgb, np.float64).T * np.asarray(env.strength, np.float64)
+    """(n, 3) float32 radiance of scenedata.Environment env at unit world directions d (n, 3),
+    through the environment light's own lookup (lights/environment.py: its frame, u/v mapping,
+    interpolation, an sRGB image's encoded texels blended then decoded, a channel blending in a
+    NaN or infinite texel read as 0), so a blended world resamples each map as it renders alone."""
+    light = EnvironmentLight(env)
+    u, v, _ = light.uv_of(np.asarray(d, np.float64).T)
+    return np.asarray(light.radiance(u, v), np.float32).T
 
 
 def blended_map(parts, directions_of, width, factor=None):
@@ -36,13 +30,17 @@ def blended_map(parts, directions_of, width, factor=None):
     maps = [env for _, env in parts if env is not None]
     width = max([int(width)] + [int(np.shape(env.pixels)[1]) for env in maps])
     dirs = directions_of(width)
-    d = np.ascontiguousarray(dirs.reshape(-1, 3), np.float32)
-    f = None if factor is None else np.asarray(factor(d), np.float64)
-    img = np.zeros((len(d), 3), np.float64)
-    for i, (uniform, env) in enumerate(parts):
-        value = np.asarray(uniform, np.float64)[None, :]
-        if env is not None:
-            value = value + environment_radiance(env, d)
-        img += value if f is None else (1.0 - f if i == 0 else f) * value
-    img = np.maximum(np.nan_to_num(img, nan=0.0, posinf=0.0, neginf=0.0), 0.0)
-    return sd.Environment(img.reshape(dirs.shape).astype(np.float32), np.ones(3, np.float32))
+    out = np.empty(dirs.shape, np.float32)
+    rows = max(1, (1 << 18) // width)          # ~256K directions a band: memory bounded at any width
+    for r0 in range(0, dirs.shape[0], rows):
+        d = np.ascontiguousarray(dirs[r0:r0 + rows].reshape(-1, 3), np.float32)
+        f = None if factor is None else np.asarray(factor(d), np.float32)
+        img = np.zeros((len(d), 3), np.float32)
+        for i, (uniform, env) in enumerate(parts):
+            value = np.asarray(uniform, np.float32)[None, :]
+            if env is not None:
+                value = value + environment_radiance(env, d)
+            img += value if f is None else (1.0 - f if i == 0 else f) * value
+        out[r0:r0 + rows] = np.maximum(np.nan_to_num(img, nan=0.0, posinf=0.0, neginf=0.0),
+                                       0.0).reshape(-1, width, 3)
+    return sd.Environment(out, np.ones(3, np.float32))

@@ -129,7 +129,8 @@ class EnvironmentLight:
         cdf = np.cumsum(self.cell_weight.ravel())
         return cdf / cdf[-1] if cdf[-1] > 0 else cdf
 
-    def _uv(self, D):
+    def uv_of(self, D):
+        """(u, v, sin theta) of unit world directions D (3, n) in the map."""
         m = self.to_map @ np.asarray(D, np.float64)
         m /= np.linalg.norm(m, axis=0)
         u = 0.5 - np.arctan2(m[1] + 0.0, m[0] + 0.0) / (2.0 * np.pi)    # -0 as +0, as the native eval
@@ -172,7 +173,7 @@ class EnvironmentLight:
 
     def eval_miss(self, D):
         """(indices, radiance (3, k), solid-angle pdf (k,)) of directions D (3, n) (every one)."""
-        u, v, s = self._uv(D)
+        u, v, s = self.uv_of(D)
         n = np.asarray(D).shape[1]
         return np.arange(n), self.radiance(u, v), self._pdf(u, v, s).astype(F32)
 

@@ -89,7 +89,7 @@ def test_nan_and_inf_texels_read_0_in_the_blends_taking_them_in(interpolation):
     finite = np.isfinite(px)
     assert np.allclose(Le, Le_ref, rtol=2e-3, atol=2e-4 * px[finite].max())
     assert ((Le == 0) == (Le_ref == 0)).mean() > 0.999
-    u, v, _ = ref._uv(D)
+    u, v, _ = ref.uv_of(D)
     near = (np.abs(u * 64 - 7.5) < 1) & (np.abs(v * 32 - 10.5) < 1) if interpolation == 'Linear' else \
         (np.floor(u * 64) == 7) & (np.floor(v * 32) == 10)
     assert near.sum() > 5 and (Le[0, near] == 0).all() and (Le[1:, near] > 0).all()
