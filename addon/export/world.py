@@ -163,7 +163,7 @@ def ray_kinds_said(by_ray, materials):
         return ''
     outputs = sorted(read & set().union(*(_READ_BY[k] for k in found)))
     names = ', '.join(f"{k} ({', '.join(repr(n) for n in dict.fromkeys(v))})" for k, v in found.items())
-    return (f"world Mix Shader on Light Path {', '.join(repr(o) for o in outputs)}: Cycles' rays leaving {names} "
+    return (f"world read by Light Path {', '.join(repr(o) for o in outputs)}: Cycles' rays leaving {names} "
             "surfaces read it by their own kind; here they see the world of a diffuse reflection, and camera "
             "rays past glass the world of light samples (every ray type 0)")
 
