@@ -224,7 +224,7 @@ def test_energies_at_the_floor_far_away_keep_finite_probabilities(case):
     u = np.linspace(0.01, 0.99, 64)
     for rows in (False, True):
         got, prob = tree.sample(np.repeat(P, len(u), 1), u, rows=rows)
-        assert set(got.tolist()) == {0, 1}, (rows, got)
+        assert np.all(np.isfinite(prob)) and np.all(prob > 0.0), (rows, prob)
         np.testing.assert_allclose(prob, pdf[got], rtol=1e-12)
 
 
