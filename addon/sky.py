@@ -555,8 +555,6 @@ def _sun_xyz(sky, dirs, elevation, pixels):
     angle = 2.0 * np.arctan2(np.linalg.norm(dirs - sun, axis=-1), np.linalg.norm(dirs + sun, axis=-1))
     half = sky.diameter / 2
     inside = (angle < half) & (elevation > sky.earth_angle())
-    if not sky.multiple:
-        inside &= dirs[..., 2] >= 0.0                       # the ground hides it there
     y = ((elevation - sky.sun_elevation) / sky.diameter + 0.5)[..., None]
     xyz = pixels[0] + y * (pixels[1] - pixels[0])
     limb = 1.0 - 0.6 * (1.0 - np.sqrt(np.maximum(1.0 - (angle / half) ** 2, 0.0)))
