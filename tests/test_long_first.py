@@ -80,7 +80,6 @@ def test_a_real_two_worker_run_starts_each_worker_on_a_long_test(tmp_path):
         "import os, pytest\n"
         + "".join(f"def test_s{i}():\n    pass\n" for i in range(8))
         + "".join(f"@pytest.mark.long\ndef test_l{i}():\n    pass\n" for i in range(2)))
-    log = tmp_path / "log.txt"
     root = str(__import__("pathlib").Path(__file__).resolve().parents[1])
     out = subprocess.run([sys.executable, "-m", "pytest", "-p", "no:cacheprovider", "-n", "2", "--dist",
                           "worksteal", "-v", f"--rootdir={tmp_path}", str(tmp_path)],
