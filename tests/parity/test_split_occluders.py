@@ -4,7 +4,7 @@ are shadowed and the bounce rays toward the light pass, and MIS weighs the two b
 light-selection pdf, so the image agrees where both engines pick the light alike. Beside a
 5000 W point lamp hidden from camera and diffuse rays, which DACRT leaves out of its light
 choice and Cycles keeps (fuzz seed 306), DACRT is 0.97x Cycles' mean (z -24, 4 seeds x 64 spp,
-/tmp/s76/s306_tools/repro.py), which is said; alone, or with the object hidden from shadow rays
+the case _scene leaves out), which is said; alone, or with the object hidden from shadow rays
 too, it matches. Per pixel and 4x4 block (Welch tests, 4 seeds a side) and per channel (1%)."""
 import math
 
