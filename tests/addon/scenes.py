@@ -600,3 +600,19 @@ def thread_limits_seen(monkeypatch):
         yield from passes(self)
     monkeypatch.setattr(integrator.Integrator, 'passes', recording)
     return seen
+
+
+def box_on_floor():
+    """The occluder scenes of the light-choice messages and their parity tests: a camera looking
+    down at a 1.2 m box ('Box') on a 12 m floor; the box."""
+    camera(location=(0, -6, 4), rotation=(math.radians(55), 0, 0))
+    plane(size=12, materials=[diffuse('floor', (0.8, 0.8, 0.8))])
+    return cube('Box', size=1.2, location=(0, 0, 0.6), materials=[diffuse('box', (0.5, 0.6, 0.7))])
+
+
+def rendered_messages(said, text):
+    """The engine's reports of one render of the context scene that contain text (said: the
+    `said` fixture's list, cleared first)."""
+    said.clear()
+    bpy.ops.render.render()
+    return [t for t in said if text in t]

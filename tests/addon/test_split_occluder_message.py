@@ -9,9 +9,6 @@ It is said, naming the object and the lamp, and not where the image cannot chang
 lamp (or one of zero strength), or the object hidden from shadow rays too.
 
 DACRT's messages at 1 sample, 32x24."""
-import math
-
-import bpy
 import pytest
 
 from tests.parity import rendering
@@ -22,9 +19,7 @@ SAID = "hidden from diffuse rays but not from shadows"
 
 
 def _scene(sc, hidden=True, diffuse=False, shadow=True, energy=5000):
-    scenes.camera(location=(0, -6, 4), rotation=(math.radians(55), 0, 0))
-    scenes.plane(size=12, materials=[scenes.diffuse('floor', (0.8, 0.8, 0.8))])
-    box = scenes.cube('Box', size=1.2, location=(0, 0, 0.6), materials=[scenes.diffuse('box', (0.5, 0.6, 0.7))])
+    box = scenes.box_on_floor()
     box.visible_diffuse, box.visible_shadow = diffuse, shadow
     scenes.light('POINT', 200, location=(0.5, 0.3, 2.2), name='Key', shadow_soft_size=0.6)
     if hidden:
@@ -35,16 +30,10 @@ def _scene(sc, hidden=True, diffuse=False, shadow=True, energy=5000):
     rendering.matched(sc, 1, bounces=0)
 
 
-def _said(sc, said):
-    said.clear()
-    bpy.ops.render.render()
-    return [t for t in said if SAID in t]
-
-
 @pytest.mark.parametrize('split', ['diffuse_off', 'shadow_off'])
 def test_said_naming_the_object_and_the_lamp(scene, said, split):
     _scene(scene, diffuse=split != 'diffuse_off', shadow=split != 'shadow_off')
-    got = _said(scene, said)
+    got = scenes.rendered_messages(said, SAID)
     assert len(got) == 1 and got[0].startswith("object(s) 'Box' hidden from diffuse rays"), got
     assert "('Hidden')" in got[0] and "'Key'" not in got[0], got
 
@@ -54,4 +43,4 @@ def test_not_said_where_the_image_cannot_change(scene, said, case):
     """(A hidden lamp of zero strength, which Cycles drops too, is no choice of its.)"""
     _scene(scene, hidden=case != 'no_hidden_lamp', shadow=case != 'unsplit',
            energy=0.0 if case == 'dark_hidden_lamp' else 5000)
-    assert not _said(scene, said)
+    assert not scenes.rendered_messages(said, SAID)

@@ -6,8 +6,6 @@ light-selection pdf, so the image agrees where both engines pick the light alike
 choice and Cycles keeps (fuzz seed 306), DACRT is 0.97x Cycles' mean (z -24, 4 seeds x 64 spp,
 the case _scene leaves out), which is said; alone, or with the object hidden from shadow rays
 too, it matches. Per pixel and 4x4 block (Welch tests, 4 seeds a side) and per channel (1%)."""
-import math
-
 import bpy
 import pytest
 
@@ -21,9 +19,7 @@ def _scene(case):
     bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x, sc.render.resolution_y = 32, 24
-    scenes.camera(location=(0, -6, 4), rotation=(math.radians(55), 0, 0))
-    scenes.plane(size=12, materials=[scenes.diffuse('floor', (0.8, 0.8, 0.8))])
-    box = scenes.cube('Box', size=1.2, location=(0, 0, 0.6), materials=[scenes.diffuse('box', (0.5, 0.6, 0.7))])
+    box = scenes.box_on_floor()
     box.visible_diffuse = False
     scenes.light('POINT', 200, location=(0.5, 0.3, 2.2), name='Key', shadow_soft_size=0.6)
     if case == 'unsplit':
