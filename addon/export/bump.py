@@ -14,6 +14,13 @@ from ..procedural import ProceduralTexels
 from . import procedurals
 
 
+def bends(node):
+    """Whether a Bump node bends the normal it passes on: its Height linked and its Strength not a
+    constant <= 0 (else Cycles passes its own Normal on: its gradient is 0, or it is not mixed in)."""
+    strength, constant = constant_value(node.inputs['Strength'])
+    return not (constant and strength <= 0.0) and linked_link(node.inputs['Height']) is not None
+
+
 def bump_nodes(socket):
     """(the Bump nodes that bend what feeds socket, outermost first; the socket past them: the
     innermost Bump's Normal input, or socket itself). A Bump of unlinked Height or of constant
@@ -24,8 +31,7 @@ def bump_nodes(socket):
         if link is None or link.from_node.type != 'BUMP':
             break
         node = link.from_node
-        strength, constant = constant_value(node.inputs['Strength'])
-        if not (constant and strength <= 0.0) and linked_link(node.inputs['Height']) is not None:
+        if bends(node):
             nodes.append(node)
         socket = node.inputs['Normal']
     return nodes, socket
@@ -62,10 +68,11 @@ def blackened_by_nan_bump(bsdf):
 
 
 def nan_bump_all_blackened(bump, depth=0):
-    """Whether every BSDF a Bump node's Normal output bends (directly or through other Bumps'
-    Normal) is one blackened_by_nan_bump renders black: its NaN then needs no other word."""
+    """Whether the Bump bends (bends) and every BSDF its Normal output bends (directly or through
+    other Bumps' Normal) is one blackened_by_nan_bump renders black: its NaN then needs no other
+    word. (A Bump that does not bend is passed over, so nothing is blackened: its NaN is said.)"""
     links = [link for link in bump.outputs['Normal'].links if not link.is_muted]
-    if not links or depth > 64:
+    if not links or depth > 64 or not bends(bump):
         return False
     for link in links:
         to = link.to_node

@@ -525,6 +525,25 @@ def test_bump_nan_distance_of_constant_height_is_read_as_0(scene, said):
     assert "NaN read as 0 (as Cycles clamps it) for 'Distance' of 'Bump'" in " | ".join(said)
 
 
+def test_a_nan_distance_bump_of_strength_0_is_still_said(scene, said):
+    """A Bump of constant Strength 0 is passed over (its own Normal passed on: nothing blackened,
+    the Diffuse lit 0.4), so its NaN Distance is said to be read otherwise than Cycles reads it
+    (Cycles' SVM still mixes the NaN into the normal: 0 x NaN); it had been said 'read as 0 (as
+    Cycles clamps it)', the words for a constant Height, as if the Bump had blackened the Diffuse."""
+    mat, nt, d, out = scenes.small_view(scene, **_GREY_LIT)
+    b = nt.nodes.new('ShaderNodeBump')
+    b.inputs['Distance'].default_value = NAN
+    b.inputs['Strength'].default_value = 0.0
+    nt.links.new(nt.nodes.new('ShaderNodeTexWave').outputs['Fac'], b.inputs['Height'])
+    nt.links.new(b.outputs['Normal'], d.inputs['Normal'])
+    scenes.plane("Plane", size=10, materials=(mat,))
+    mean = scenes.render_rgba(scene)[..., :3].reshape(-1, 3).mean(0)
+    assert np.allclose(mean, 0.4, atol=2e-3), mean
+    text = " | ".join(said)
+    assert "NaN read as 0 for 'Distance' of 'Bump', where Cycles renders it otherwise" in text, text
+    assert "as Cycles clamps it" not in text and "renders black, as in Cycles" not in text, text
+
+
 def test_a_sheen_bent_by_a_nan_distance_bump_is_still_said(scene, said):
     """A Sheen is not black in Cycles under such a Bump (0.28 against DACRT's 0.05): not blackened,
     and the NaN is said not to be read as Cycles reads it (it had been said black in Cycles)."""
