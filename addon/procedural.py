@@ -104,6 +104,17 @@ def clip_unit(x, nan):
     return x
 
 
+def lerped(factor, lo, hi):
+    """coords -> lo + (hi - lo) x factor at coords: two per-point lookups (procedural texels'
+    functions) mixed by a per-point factor, clamped by its maker (clip_unit). It reads no Blender
+    data: it runs during the render's lookups."""
+    def at(coords):
+        f = factor(coords)
+        a = lo(coords)
+        return a + (hi(coords) - a) * f
+    return at
+
+
 def noise_texture(co, scale, detail, roughness, lacunarity, distortion, normalize, dims, want_color, kind='FBM',
                   offset=0.0, gain=1.0, w=None, n=None):
     """The Noise Texture node at points co (n, 3) (or None in 1D) and W w (n,) (1D and 4D; else

@@ -142,7 +142,7 @@ class Cutouts:
         # an Alpha or a Mix Shader factor that is NaN is 0 in Cycles (its clamp to [0, 1]), before
         # the factor is turned into an opacity (measured: NaN texels through a Math node show
         # the world behind a Principled and the first of a Mix Shader's two; it had read 1)
-        a = np.clip(np.nan_to_num(a, nan=0.0), 0.0, 1.0)
+        a = clip_unit(np.asarray(a), 0.0)
         if inverted:
             a = 1.0 - a
         px = np.zeros(a.shape + (4,), np.float32)

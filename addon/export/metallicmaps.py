@@ -19,7 +19,7 @@ import numpy as np
 
 from .. import principled
 from ..nodeeval import constant_value
-from ..procedural import ProceduralTexels
+from ..procedural import ProceduralTexels, clip_unit, lerped
 from . import procedurals
 from .closure import Closure, Texture, colour_at
 from .texturedmixes import factor_source
@@ -58,14 +58,12 @@ def metallic_mix(base, node, found, reasons):
         return None
     reasons.extend(notes + list(dict.fromkeys(said)))
 
+    def metallic(coords):
+        return clip_unit(np.asarray(fn(coords), np.float64)[:, :1], 0.0)
+
     def mixed(ends):
         (a, a_needs), (b, b_needs) = ends
-
-        def at(coords):      # reads no Blender data: it runs during the render's lookups
-            m = np.clip(np.nan_to_num(np.asarray(fn(coords), np.float64)[:, :1], nan=0.0), 0.0, 1.0)
-            lo = a(coords)
-            return lo + (b(coords) - lo) * m
-        return Texture.procedural(ProceduralTexels(at, needs | a_needs | b_needs, str(sources)))
+        return Texture.procedural(ProceduralTexels(lerped(metallic, a, b), needs | a_needs | b_needs, str(sources)))
     out = Closure(texture=mixed(albedos), tex_weight=(1.0, 1.0, 1.0))
     if all(s.passes is None for s in sides):
         return out

@@ -8,7 +8,7 @@ export/cutouts.py)."""
 import numpy as np
 
 from ..nodegraph import links_feeding
-from ..procedural import ProceduralTexels
+from ..procedural import ProceduralTexels, clip_unit, lerped
 from ..texture import ImageTexels, stored_texels
 from . import procedurals
 from .closure import Closure, Texture, colour_at, cutout_sum, per_point, same_rough
@@ -102,7 +102,7 @@ class TexturedMixes:
         reasons.extend(notes)
         if _alike(*sides):      # (one rough diffuse in both inputs: itself, whatever the factor)
             return sides[0]
-        fac = np.clip(np.nan_to_num(fac[..., None].astype(np.float64), nan=0.0), 0.0, 1.0)
+        fac = clip_unit(fac[..., None].astype(np.float64), 0.0)
         after = self._after_lookup(fac_socket, src, stored_texels(src.pixels), False)
         if after is None and src.interpolation != 'Closest':
             reasons.append(f"Mix Shader factor from nodes on image '{src.name}' evaluated per texel before the "
@@ -166,7 +166,7 @@ class TexturedMixes:
             return cutout
 
         def factor(coords):
-            return np.clip(np.nan_to_num(np.asarray(fac_fn(coords), np.float64), nan=0.0), 0.0, 1.0)
+            return clip_unit(np.asarray(fac_fn(coords), np.float64), 0.0)
         self._point_mix = (split, lambda: (factor, needs))
         if any(c.transparent.any() or c.opacity is not None for c in closures):
             # a see-through side that is not a pure cut-out (a Transparent beside a Diffuse,
@@ -210,10 +210,7 @@ class TexturedMixes:
         reasons.extend(fac_notes + notes)
 
         def mixer(sides, kind='procedural', extra=frozenset()):
-            def mixed(coords):      # reads no Blender data: it runs during the render's lookups
-                f = factor(coords)
-                a = sides[0](coords)
-                return a + (sides[1](coords) - a) * f
+            mixed = lerped(factor, *sides)
             return Texture.procedural(ProceduralTexels(mixed, side_needs[kind] | extra, str(sources)), kind)
         emission, etex = np.zeros(3), None
         if any(_emits(c) for c in closures):

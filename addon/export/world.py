@@ -368,7 +368,7 @@ def _factor_mix(node, weight, color, reasons, depth, rays, by_ray, frame, readin
 
     def factor(d):
         f = np.asarray(fn(coordinates(d)), np.float64)
-        return np.clip(np.nan_to_num(f, nan=0.0), 0.0, 1.0)
+        return pr.clip_unit(f, 0.0)
     env = worldmix.blended_map(sides, _equirect_directions, PROCEDURAL_WIDTH, factor)
     source = str(src) if src else _feeding_name(node.inputs['Fac'])
     reasons.append(f"world Mix Shader factor from {source} baked into a {_map_said(env)}")
@@ -440,7 +440,7 @@ def _baked(sockets, strength, what, reasons, sides=None, view=None):
     for fn, _, _ in chains:
         img = img * np.asarray(fn(coords), np.float64)      # ((n, 1) floats broadcast over RGB)
     if sides is not None:           # a Mix Shader: img is its factor, then (1 - f) A + f B
-        f = np.clip(np.nan_to_num(img, nan=0.0), 0.0, 1.0)
+        f = pr.clip_unit(img, 0.0)
         img = np.zeros_like(img)
         for w, side in zip((1.0 - f, f), side_values):
             img = img + w * side(coords)
