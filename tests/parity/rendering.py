@@ -15,6 +15,9 @@ import bpy
 import numpy as np
 from mathutils import Vector
 
+from tests.addon import scenes
+from tests.parity import stats
+
 
 def build(spec):
     """Reset to a factory-empty scene, build spec's scene and apply the shared settings."""
@@ -158,7 +161,6 @@ def small_cornell(width=48, height=36):
 def render_layers(scene, spec, directory):
     """{engine: {'<layer>.<pass>.<channel>': (H, W) float32}} of the scene rendered by Cycles
     and DACRT with spec's settings (seed 0), as multilayer EXRs in directory."""
-    from tests.addon import scenes
     out = {}
     for engine, setup in (('CYCLES', set_cycles), ('DACRT', set_dacrt)):
         setup(scene, spec, 0)
@@ -221,3 +223,13 @@ def render_seeds(spec, engine, seeds, workdir=None):
     if len(shapes) != 1:
         raise RuntimeError(f"{engine} images of {spec.name} differ in size between seeds: {shapes}")
     return np.stack(images)
+
+
+def assert_agrees(scene, seeds=4, **compare):
+    """Renders scene with Cycles and with DACRT once per seed 0..seeds-1 and asserts that the
+    two agree by stats.compare (per channel mean, per pixel and per block; its keywords
+    `compare`); returns the (seeds, H, W, 3) stacks (cycles, dacrt) for a test's own checks."""
+    cycles, dacrt = scenes.seeded_rgb(scene, 'CYCLES', seeds), scenes.seeded_rgb(scene, 'DACRT', seeds)
+    result = stats.compare(cycles, dacrt, **compare)
+    assert result.passed, result.summary()
+    return cycles, dacrt

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from tests.addon import scenes
-from tests.parity import stats
+from tests.parity import rendering
 from tests.parity.test_points_curves import _scene
 
 pytestmark = pytest.mark.usefixtures('parity_addon')
@@ -59,9 +59,7 @@ def test_poly_strands_and_their_shadows_match_cycles_per_pixel(said):
     and joints where open tubes had rendered brighter and their shadows lighter. The export says
     the tubes' ends are round."""
     sc = _strands(floor=True)
-    cycles, dacrt = scenes.seeded_rgb(sc, 'CYCLES', 4), scenes.seeded_rgb(sc, 'DACRT', 4)
-    result = stats.compare(cycles, dacrt)
-    assert result.passed, result.summary()
+    rendering.assert_agrees(sc)
     assert any("straight between their points (Poly), round ends" in t for t in said), said
 
 

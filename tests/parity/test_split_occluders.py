@@ -10,7 +10,7 @@ import bpy
 import pytest
 
 from tests.addon import scenes
-from tests.parity import rendering, stats
+from tests.parity import rendering
 
 pytestmark = pytest.mark.usefixtures('parity_addon')
 
@@ -34,7 +34,5 @@ def _scene(case):
 @pytest.mark.parametrize('case', ['alone', 'unsplit'])
 def test_split_occluder_matches_cycles(case, said):
     sc = _scene(case)
-    cycles, dacrt = scenes.seeded_rgb(sc, 'CYCLES', 4), scenes.seeded_rgb(sc, 'DACRT', 4)
-    result = stats.compare(cycles, dacrt)
-    assert result.passed, result.summary()
+    rendering.assert_agrees(sc)
     assert not any("hidden from diffuse rays but not from shadows" in t for t in said), said

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from tests.addon import scenes
-from tests.parity import stats
+from tests.parity import rendering
 from tests.parity.test_hair_fixes import _means, _small_scene
 
 pytestmark = pytest.mark.usefixtures('parity_addon')
@@ -48,8 +48,5 @@ def test_stretched_points_over_a_floor_match_cycles_per_pixel(said):
     ob.scale = (0.3, 1.0, 1.0)
     scenes.plane('Floor', 6.0, location=(0, 0, -0.45), materials=[scenes.diffuse('F', (0.5, 0.5, 0.5))])
     said.clear()
-    dac = scenes.seeded_rgb(sc, 'DACRT', 8)
-    cyc = scenes.seeded_rgb(sc, 'CYCLES', 8)
-    result = stats.compare(cyc, dac, mean_tol=0.02)
-    assert result.passed, result.summary()
+    rendering.assert_agrees(sc, 8, mean_tol=0.02)
     assert not [t for t in said if 'non-uniformly scaled' in t], said
