@@ -169,6 +169,14 @@ class LightSetup:
                                           "nor diffuse rays can see, nor camera rays past glass (the scene has "
                                           "none, or they are hidden from its transmission rays): "
                                           f"{', '.join(dict.fromkeys(self.lights.unseen_lamps))}"))
+        if self.lights.choice_only_lamps:
+            # (Cycles keeps them in its light choice, where they take samples from the others)
+            self.messages.append(('INFO', f"{len(self.lights.choice_only_lamps)} light(s) that neither camera nor "
+                                          "diffuse rays can see, nor camera rays past glass (the scene has none, or "
+                                          "they are hidden from its transmission rays), light nothing here, but "
+                                          "keep their share of the light choice, as in Cycles (it spends light "
+                                          "samples on them): "
+                                          f"{', '.join(dict.fromkeys(self.lights.choice_only_lamps))}"))
         # Native lamp records (dacrt.lamps): the lamps light sampling may choose (0..nl-1), then
         # those only BSDF and camera rays find (the world), then those only camera rays see.
         # Record index lists per ray kind, for lamp_gather.
@@ -329,33 +337,30 @@ class LightSetup:
         Cycles' (its light tree weighs the world per shading point): a Noise world beside one
         emissive cube, fuzz 1589, 1.08-1.09x Cycles in the bounce world's channels (1.04x without
         the light tree); 0.9997-0.9999x without the cube, and with the same world on both sides."""
-        if not self._bounce_worlds or self.lights.environment is None or self._lights_chosen_among() < 2:
+        if not self._bounce_worlds or self.lights.environment is None or self.lights.num_entries < 2:
             return
         self.messages.append(('WARNING', "world approximated: diffuse bounces see another world than light samples "
                                          "(a Light Path mix), weighted against the world's light samples, whose "
                                          "share of the light choice beside the other lights is DACRT's, not "
                                          "Cycles': the world's light may differ by several percent"))
 
-    def _lights_chosen_among(self):
-        """How many light sources Cycles' light selection chooses among: DACRT's entries and the
-        lamps hidden from diffuse rays, which DACRT leaves out of its selection and Cycles keeps."""
-        lights = self.lights
-        return lights.num_entries + len(lights.unseen_lamps) + len(lights.camera_lamps)
-
     def _say_split_occluders(self, sd: SceneData):
         """Objects that light samples and bounce rays see differently (hidden from diffuse rays
-        but casting shadows, or the reverse) beside lamps DACRT leaves out of its light choice
-        (hidden from diffuse rays: unseen_lamps, camera_lamps). Behind such an object a light's
-        samples and the bounce rays toward it disagree (shadowed or not), and MIS weighs the two
-        by how likely the light is chosen. Cycles keeps the hidden lamps in its choice, where they
-        take their share of the picks (by power), so it weighs the other lights' bounce-ray hits
-        more than DACRT: fuzz seed 306 (a 413 W diffuse-hidden point lamp beside a diffuse-hidden
-        half cylinder), Cycles 3.5% brighter than without the lamp, one 4x4 block 4-6x DACRT's,
-        unsaid; tests/parity/test_split_occluders.py: 0.97x Cycles' mean, 1.0001x without the
-        hidden lamp, at 1e-3 W or with the object hidden from shadow rays too."""
+        but casting shadows, or the reverse) beside lamps hidden from diffuse rays that DACRT's
+        light tree does not hold (suns, or every lamp with Light Tree off). Behind such an object
+        a light's samples and the bounce rays toward it disagree (shadowed or not), and MIS weighs
+        the two by how likely the light is chosen. Both engines keep the hidden lamps in their
+        choice (lights/choiceonly.py: fuzz seed 306, 0.97x Cycles while DACRT left them out, now
+        matched, tests/parity/test_split_occluders.py); the tree weighs them as Cycles' does, but
+        outside it DACRT's reweighting gives a lamp that lights nothing only the uniform part of
+        its share, where Cycles gives it its power's: a hidden sun beside the split box, Cycles
+        0.44% brighter than without it, DACRT unchanged (0.996x); Light Tree off, 0.997x."""
         lights = self.lights
-        unseen = list(dict.fromkeys(lights.unseen_lamps + [l.name for l in lights.camera_lamps]))
-        if not unseen or self._lights_chosen_among() < 2 or not len(self.tri):
+        if not lights.hidden_lamps or lights.num_entries < 2 or not len(self.tri):
+            return
+        first = lights.num_lamps - len(lights.hidden_lamps)     # (the stand-ins close the lamps)
+        apart = [l.name for i, l in enumerate(lights.hidden_lamps, first) if not lights.tree_member[i]]
+        if not apart:
             return
         vis = self.tri.visibility
         split = (((vis & VIS_DIFFUSE) != 0) != ((vis & VIS_SHADOW) != 0)) & (self.tri.area > 0)
@@ -363,10 +368,11 @@ class LightSetup:
             return
         self.messages.append(('WARNING', f"object(s) {sd.named_objects(split)} hidden from diffuse rays but not from "
                                          "shadows (or the reverse): behind them light samples and bounce rays "
-                                         "disagree, weighed by how likely each light is chosen, and Cycles also "
-                                         "chooses among light(s) hidden from diffuse rays "
-                                         f"({', '.join(repr(n) for n in unseen)}), which DACRT leaves out of its "
-                                         "choice, so the light near those objects differs (several percent)"))
+                                         "disagree, weighed by how likely each light is chosen, and light(s) "
+                                         "hidden from diffuse rays outside the light tree (suns, or all with "
+                                         f"Light Tree off: {', '.join(repr(n) for n in dict.fromkeys(apart))}) "
+                                         "take a share of that choice that is DACRT's, not Cycles', so the light "
+                                         "near those objects differs (about 0.5%)"))
 
     def _say_shadowless_lamps(self):
         """Lamps with Cast Shadow off that BSDF rays meet (MIS on, a radius, size or angle):
@@ -377,25 +383,21 @@ class LightSetup:
         picks it with its own probability (reweight, the tree's estimates), so near an occluder
         the light differs: a shadowless area light beside a point light 1.01x Cycles' mean, 1.1x
         by a cube; a wide shadowless sun under a Hosek sky (fuzz seed 305) 4x4 blocks 1.08x.
-        Lamps hidden from diffuse rays (unseen_lamps, camera_lamps), which DACRT leaves out of
-        its light selection, count among those others: Cycles keeps them in its selection, where
-        they take their share of the picks (a wide shadowless sun beside an area light hidden
-        from diffuse rays: Cycles 0.7% darker than without it, one object's pixels 1.3-1.9x in
-        DACRT, unsaid: fuzz 1459)."""
+        Lamps hidden from diffuse rays count among those others: both engines keep them in
+        their selection (lights/choiceonly.py), where they take their share of the picks (a
+        wide shadowless sun beside an area light hidden from diffuse rays: Cycles 0.7% darker
+        than without it, fuzz 1459)."""
         lights = self.lights
-        if self._lights_chosen_among() < 2:
+        if self.lights.num_entries < 2:
             return
         # (instances of one lamp share its name: said once)
         names = list(dict.fromkeys(l.name for l in lights.lamps if not l.cast_shadow and l.seen_by_bsdf))
         if names:
-            unseen = list(dict.fromkeys(lights.unseen_lamps + [l.name for l in lights.camera_lamps]))
-            also = (f"; Cycles also chooses among lights hidden from diffuse rays ({', '.join(repr(n) for n in unseen)}"
-                    "), which DACRT leaves out of its choice" if unseen else "")
             self.messages.append(('WARNING', f"light(s) {', '.join(repr(n) for n in names)} have Cast Shadow off "
                                              "and Multiple Importance on: light samples light past occluders, "
                                              "BSDF rays toward the light stop at them, and the two are weighed "
                                              "by how likely each light is chosen, which differs from Cycles "
-                                             f"beside other light sources{also}, so the light near occluders differs "
+                                             "beside other light sources, so the light near occluders differs "
                                              "(turn off Multiple Importance, or Cast Shadow back on, to match)"))
 
     def _say_surfaces_inside_sphere_spots(self):

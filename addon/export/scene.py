@@ -508,14 +508,9 @@ class Exporter:
         parent = inst.parent if inst.is_instance and inst.parent is not None else ob
         diffuse = ob.visible_diffuse and parent.visible_diffuse
         glossy = getattr(ob, 'visible_glossy', True) and getattr(parent, 'visible_glossy', True)
-        # (camera rays past glass are Cycles' transmission rays: they see a lamp by its
-        # Transmission visibility, kept for them; one only they see had been dropped here)
-        transmission = getattr(ob, 'visible_transmission', True) and getattr(parent, 'visible_transmission', True)
-        if not (diffuse or transmission or (ob.visible_camera and parent.visible_camera)):
-            self.skip("lights with camera, diffuse and transmission ray visibility off (their own or "
-                      "their instancer's) light and show nothing here, where every surface is diffuse"
-                      + (" (Cycles still lights glossy layers with them)" if glossy else ""), ob.name)
-            return None
+        # (one no ray kind sees is kept all the same: Cycles keeps it in its light choice, where
+        # it takes its share of the picks, lights/choiceonly.py; it had been skipped here. Camera
+        # rays past glass see a lamp by its Transmission visibility: LightSet tells them apart)
         if glossy != diffuse:
             # glossy layers render as diffuse (approximated, reported per material): they take
             # the light as diffuse surfaces do. Said at the end, only where some material has

@@ -17,9 +17,10 @@ takes none (background.py). (Weighting by estimated irradiance was tried and dro
 global, and starved a spot light where it is the main light.) The selection probability of
 every light is known, so a BSDF ray that meets a light can be weighted against light sampling
 (MIS).
-Lamps with diffuse ray visibility off take no part in that choice (camera rays may see them),
-nor does the (uniform) world: BSDF rays alone collect it, with weight 1, as in Cycles
-(background.py says why). An environment map, which varies over directions, is a group of its
+Lamps with diffuse ray visibility off light no diffuse surface (camera rays may see them) but,
+as in Cycles, keep their share of that choice, as stand-ins whose samples give nothing
+(choiceonly.py). The (uniform) world takes no part in it: BSDF rays alone collect it, with
+weight 1, as in Cycles (background.py says why). An environment map, which varies over directions, is a group of its
 own (environment.py), chosen last in the table.
 """
 from __future__ import annotations
@@ -33,6 +34,7 @@ from .background import BackgroundLight
 from .environment import EnvironmentLight
 from .lamplanes import lamp_group_stats
 from .base import F32, RECORD_WIDTH, Lamp, LightSample
+from .choiceonly import choice_only
 from .point import PointLight, SpotLight
 from .sun import SunLight
 from .tree import build_tree
@@ -84,14 +86,21 @@ class LightSet:
             environment = None
         self.environment = environment
         # Cycles excludes a light with diffuse ray visibility off from diffuse surfaces
-        # altogether (light sampling and BSDF hits): only camera rays may still see it.
-        self.lamps = [l for l in lit if l.visible_diffuse and l.light_sampled]
+        # (its light samples light no diffuse closure, BSDF rays pass it): only camera rays may
+        # still see it. It keeps its share of the light choice, though, which lowers every other
+        # light's, and so their MIS weights: a stand-in that gives nothing takes it (choiceonly.py)
+        self.hidden_lamps = [choice_only(l) for l in lit if not l.visible_diffuse and l.light_sampled]
+        self.lamps = [l for l in lit if l.visible_diffuse and l.light_sampled] + self.hidden_lamps
         # lamps only BSDF (and camera) rays find: never chosen, so a BSDF hit weighs 1
         self.unsampled_lamps = [l for l in lit if l.visible_diffuse and not l.light_sampled]
         # (camera rays past glass see by Transmission visibility: the integrator tells them apart)
         seen = [l.seen_by_camera or (glass and l.seen_by_transmission) for l in lit]
         self.camera_lamps = [l for l, c in zip(lit, seen) if not l.visible_diffuse and c]
-        self.unseen_lamps = [l.name for l, c in zip(lit, seen) if not l.visible_diffuse and not c]
+        # (unseen: skipped, or, light-sampled, kept in the choice alone: choice_only_lamps)
+        self.unseen_lamps = [l.name for l, c in zip(lit, seen) if not l.visible_diffuse and not c
+                             and not l.light_sampled]
+        self.choice_only_lamps = [l.name for l, c in zip(lit, seen) if not l.visible_diffuse and not c
+                                  and l.light_sampled]
         self.triangles = triangles if triangles is not None and len(triangles) else None
         self.num_lamps = len(self.lamps)
         self._num_triangles = num_triangles
