@@ -21,6 +21,17 @@ from .texelbaking import channel_line, lookup_chain
 TEXTURE_EXTENSIONS = ('REPEAT', 'EXTEND', 'CLIP', 'MIRROR')
 
 
+def lookup_settings(node, reasons):
+    """(interpolation, extension) an Image Texture node's lookups use here: Smart is Cycles'
+    bicubic too (its SVM image lookup: closest, linear, else cubic); an extension the export
+    does not implement is read as repeat, said."""
+    interp = {'Closest': 'Closest', 'Cubic': 'Cubic', 'Smart': 'Cubic'}.get(node.interpolation, 'Linear')
+    if node.extension not in TEXTURE_EXTENSIONS:
+        reasons.append(f"{node.extension.lower()} image extension as repeat")
+        return interp, 'REPEAT'
+    return interp, node.extension
+
+
 class ImageTextures:
     """A mixin of materials.MaterialBuilder (see the module docstring): its methods read and
     set the builder's state."""
@@ -43,11 +54,7 @@ class ImageTextures:
             transform = None
             if per_point == 'uv':
                 self._uv_names.append(uv_map_name(node))
-        # Smart is Cycles' bicubic too (its SVM image lookup: closest, linear, else cubic)
-        interp = {'Closest': 'Closest', 'Cubic': 'Cubic', 'Smart': 'Cubic'}.get(node.interpolation, 'Linear')
-        ext = node.extension if node.extension in TEXTURE_EXTENSIONS else 'REPEAT'
-        if node.extension not in TEXTURE_EXTENSIONS:
-            reasons.append(f"{node.extension.lower()} image extension as repeat")
+        interp, ext = lookup_settings(node, reasons)
         if img is None:
             reasons.append("Image Texture without an image (magenta, as Cycles)")
             return None

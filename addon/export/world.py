@@ -344,35 +344,70 @@ def _procedural_strength(node, weight, reasons, view=None):
 
 
 def _factor_mix(node, weight, color, reasons, depth, rays, by_ray, frame, reading, view):
-    """(zero uniform radiance, Environment) of a world Mix Shader whose factor is computed from
-    procedural textures of the view direction (as _procedural_mix) between shaders that are not
-    both Backgrounds of such colours (an Environment or Sky Texture, a Light Path mix, another
-    Mix or Add): each side exported as the world is (_world_surface, for the same rays), the two
-    blended per direction into one map, (1 - f) A + f B (worldmix.blended_map); None where the
-    factor reads anything else. Its factor had stood at its own value 0.5, said (fuzz 200, 208,
-    215, 221, 223, 227, 241, 246, 250: 0.71-1.31x Cycles per channel)."""
-    from . import procedurals
+    """(zero uniform radiance, Environment) of a world Mix Shader whose factor is computed per
+    view direction (_direction_factor: procedural textures as _procedural_mix, images) between
+    shaders that are not both Backgrounds of procedural colours (an Environment or Sky Texture,
+    a Light Path mix, another Mix or Add): each side exported as the world is (_world_surface,
+    for the same rays), the two blended per direction into one map, (1 - f) A + f B
+    (worldmix.blended_map); None where the factor reads anything else. Its factor had stood at
+    its own value 0.5, said (fuzz 200, 208, 215, 221, 223, 227, 241, 246, 250: 0.71-1.31x Cycles
+    per channel)."""
     notes = []
-    found = procedurals.compile_socket(node.inputs['Fac'], False, notes, view=True)
+    found = _direction_factor(node.inputs['Fac'], notes, frame, reading, view)
     if found is None:
         return None
-    fn, needs, src = found
-    coordinates = _world_coordinates(needs, view, reasons)
-    if coordinates is None:
-        return None
+    factor, source = found
     sides = [_world_surface(node.inputs[i], weight, color, reasons, depth + 1, rays, by_ray, frame, reading, view)
              for i in (1, 2)]
     reasons.extend(notes)
     if all(env is None for _, env in sides) and np.array_equal(sides[0][0], sides[1][0]):
         return sides[0]         # ((1 - f) A + f A: the factor changes nothing)
-
-    def factor(d):
-        f = np.asarray(fn(coordinates(d)), np.float64)
-        return pr.clip_unit(f, 0.0)
     env = worldmix.blended_map(sides, _equirect_directions, PROCEDURAL_WIDTH, factor)
-    source = str(src) if src else _feeding_name(node.inputs['Fac'])
     reasons.append(f"world Mix Shader factor from {source} baked into a {_map_said(env)}")
     return np.zeros(3, np.float32), env
+
+
+def _direction_factor(socket, reasons, frame, reading, view):
+    """(fn(d (n, 3)) -> (n, 1) factor clamped to [0, 1] as Cycles' Mix Shader clamps it, what it
+    reads (for messages)) of a world Mix Shader's Fac that is a function of the view direction
+    alone: a chain procedurals.compile_socket compiles (procedural textures, Image Textures on
+    Generated, Normal or other world coordinates, Fresnel, through colour and math nodes), or one
+    Environment Texture's colour through colour and math nodes (nodeeval.compile_image_chain,
+    run on the colour looked up per direction, as Cycles runs the nodes after its lookup); None
+    otherwise. A factor from an image had stood at its own value 0.5, said."""
+    from . import procedurals
+    found = procedurals.compile_socket(socket, False, reasons, image=worldmix.factor_images(frame, reading),
+                                       view=True)
+    if found is not None:
+        fn, needs, src = found
+        coordinates = _world_coordinates(needs, view, reasons)
+        if coordinates is None:
+            return None
+
+        def compiled(d):
+            return np.asarray(fn(coordinates(d)), np.float64)
+        return _clamped(compiled), str(src) if src else _feeding_name(socket)
+    envs = _environments_feeding(socket)
+    # (an Alpha output, where a Blender version has one, would read 1 here)
+    alpha = len(envs) == 1 and envs[0].outputs.get('Alpha')
+    if len(envs) != 1 or (alpha and alpha.is_linked) or _environments_feeding(socket, 'TEX_SKY'):
+        return None
+    try:
+        chain = nodeeval.compile_image_chain(socket, False, envs[0].image.as_pointer())
+    except nodeeval.NotCompiled:
+        return None
+    uniform, env = _environment(envs[0], 1.0, reasons, frame=frame, reading=reading, view=view)
+
+    def looked_up(d):
+        rgb = np.broadcast_to(uniform, (len(d), 3)) if env is None else uniform + worldmix.environment_radiance(env, d)
+        px = np.concatenate([rgb, np.ones((len(d), 1), np.float32)], axis=1)
+        return np.asarray(chain(px), np.float64).reshape(len(d), -1)[:, :1]
+    return _clamped(looked_up), f"environment image '{envs[0].image.name}'"
+
+
+def _clamped(fn):
+    """fn(d) clamped to [0, 1], NaN read as 0 (a Mix Shader's factor)."""
+    return lambda d: pr.clip_unit(np.asarray(fn(d), np.float64), 0.0)
 
 
 def _map_said(env):

@@ -2,12 +2,17 @@
 Environment or Sky Texture, a world Light Path mix resolved for one kind of ray), blended into one
 equirectangular map that the environment light blends and samples: a world Mix Shader whose factor
 varies over the view direction ((1 - f) A + f B per direction), and an Add Shader of two maps (their
-sum). Part of the export layer."""
+sum); and the images such a factor reads (factor_images). Part of the export layer."""
 
 import numpy as np
 
+from .. import nodeeval
 from .. import scenedata as sd
 from ..lights.environment import EnvironmentLight
+from ..mapping import texture_transform
+from .closure import Texture
+from .images import associates_alpha, image_pixels
+from .imagetextures import lookup_settings
 
 
 def environment_radiance(env, d):
@@ -44,3 +49,28 @@ def blended_map(parts, directions_of, width, factor=None):
         out[r0:r0 + rows] = np.maximum(np.nan_to_num(img, nan=0.0, posinf=0.0, neginf=0.0),
                                        0.0).reshape(-1, width, 3)
     return sd.Environment(out, np.ones(3, np.float32))
+
+
+def factor_images(frame, reading):
+    """The image reader (procedurals.compile_socket's `image`: fn(node, reasons, per_point) ->
+    closure.Texture or None) of a world Mix Shader's factor: each Image Texture node's pixels at
+    `frame` through the export's images.ImageReading, its interpolation and extension as a
+    material reads them, so a factor of an image of the view direction (on Generated or Normal
+    coordinates) computes per direction; a UDIM image is not compiled (the factor then stands
+    at its own value, said)."""
+    def image(node, reasons, per_point=None):
+        img = node.image
+        interp, ext = lookup_settings(node, reasons)
+        if img is None:
+            reasons.append("Image Texture without an image (magenta, as Cycles)")
+            return None
+        if img.source == 'TILED':
+            raise nodeeval.NotCompiled(f"UDIM image '{img.name}'")
+        # (Cycles unassociates the colour of an image stored associated where its Alpha is read)
+        unassociate = bool(node.outputs['Alpha'].is_linked and associates_alpha(img))
+        pixels = image_pixels(img, reasons, unassociate, node.image_user, frame, reading)
+        if pixels is None:
+            return None
+        transform = texture_transform(node, reasons) if per_point is None else None
+        return Texture((img.as_pointer(), unassociate, interp, ext), pixels, interp, ext, transform, None, img.name)
+    return image
