@@ -105,7 +105,7 @@ def _matches_kept(env) -> bool:
     texels = env.pixels
     # (the kept array itself, read-only with all it views, cannot have been written: a file's
     # texels export.readkeep gives again)
-    same = isinstance(texels, np.ndarray) and ((texels is _same['texels'] and _read_only(texels)) or (
+    same = isinstance(texels, np.ndarray) and ((texels is _same['texels'] and read_only(texels)) or (
         not np.may_share_memory(_same['texels'], texels) and same_bits(_same['texels'], texels)))
     if same:
         _same['texels'] = texels        # (the same bits: the older frame's array can go)
@@ -114,7 +114,7 @@ def _matches_kept(env) -> bool:
     return same
 
 
-def _read_only(a) -> bool:
+def read_only(a) -> bool:
     """Whether a and every array it views are read-only."""
     while isinstance(a, np.ndarray):
         if a.flags.writeable:
@@ -181,7 +181,7 @@ def _scanned(texels):
     """The latest scan's texel_stats if texels is the very array scanned then and it, with every
     array it views, is read-only (so its bits are those scanned); else None. Under _lock."""
     seen = _stats.get('texels')
-    return _stats['stats'] if seen is not None and seen() is texels and _read_only(texels) else None
+    return _stats['stats'] if seen is not None and seen() is texels and read_only(texels) else None
 
 
 def _any_positive_rgb(texels) -> bool:
@@ -200,7 +200,7 @@ def texel_stats(texels):
     stats = dacrt.lamps.texel_stats(texels)
     with _lock:
         _stats.clear()
-        if isinstance(texels, np.ndarray) and _read_only(texels):
+        if isinstance(texels, np.ndarray) and read_only(texels):
             _stats.update(texels=weakref.ref(texels), stats=stats)
     return stats
 
