@@ -483,6 +483,11 @@ def _node(node, out, chain, depth):
         return _texture(node, out, chain, depth)
     if t == 'TEX_IMAGE' and chain.image is not None:
         return _image(node, out, chain, depth)
+    if t == 'TEX_ENVIRONMENT' and node.image is None:
+        # Cycles' missing image, opaque magenta, as nodeeval reads it (a world colour mixing it
+        # with a texture had stood at the socket's own colour, said "not evaluated")
+        const = np.array((1.0,) if out.name == 'Alpha' else (1.0, 0.0, 1.0), np.float64)[None]
+        return (lambda c: const), False
     if t == 'LIGHT_FALLOFF' and chain.ray:
         return _falloff(node, out, chain, depth), False
     if t == 'LIGHT_FALLOFF':

@@ -482,13 +482,16 @@ def _baked(sockets, strength, what, reasons, sides=None, view=None):
     img = img.reshape(height, PROCEDURAL_WIDTH, 3)
     img = np.nan_to_num(img, nan=0.0, posinf=0.0, neginf=0.0)
     sources = ', '.join(dict.fromkeys(str(src) for _, _, src in chains + side_chains if src))
+    linked = [s for s, _ in sockets] + [s for side in sides or () if side for s, _ in side]
     if not sources:             # (a chain of coordinates alone reads no texture: name its nodes)
-        linked = [s for s, _ in sockets] + [s for side in sides or () if side for s, _ in side]
         sources = ', '.join(dict.fromkeys(filter(None, map(_feeding_name, linked))))
     if (img < 0).any():         # (no negative light: the environment adds light only)
         reasons.append(f"{what} from {sources} below 0 in places: read as 0 there")
         img = np.maximum(img, 0.0)
     reasons.extend(notes)
+    if any(_environments_feeding(s, with_image=False) for s in linked):
+        # (baked on its magenta, unsaid: the message the unbaked world gives)
+        reasons.append(f"{what} from an Environment Texture without an image (magenta, as Cycles)")
     reasons.append(f"{what} from {sources} baked into a {PROCEDURAL_WIDTH} x {height} map, blended between "
                    "its texels (Cycles evaluates it per ray)")
     env = sd.Environment(img.astype(np.float32), np.asarray(strength, np.float32))
