@@ -28,5 +28,4 @@ def choice_only(lamp: Lamp) -> Lamp:
     stand.bounds = lambda: bounds
     stand.emit = np.zeros(3, F32)
     stand.visible_camera = stand.visible_transmission = stand.visible_diffuse = False
-    stand.choice_only = True
     return stand

@@ -549,6 +549,31 @@ def test_light_without_diffuse_visibility_lights_nothing():
     assert any('Ghost' in text for _, text in unseen.messages)
 
 
+def test_light_hidden_from_diffuse_rays_keeps_its_share_of_the_tree():
+    """Its stand-in (lights/choiceonly.py) sits in the light tree with the lamp's own bounds and
+    power, so the visible lamp beside it is picked as often as beside a visible twin of it (as
+    Cycles picks it: fuzz seed 306), and its samples give nothing."""
+    from addon.lights import LightSet
+    key = make_lamp(light('POINT', 200.0, translation(0.5, 0.3, 2.2), radius=0.6, name='Key'))
+    twin = light('POINT', 5000.0, translation(-3.0, 2.0, 3.0), radius=0.2, name='Hidden')
+    hidden, seen = make_lamp(dataclasses.replace(twin, visible_diffuse=False)), make_lamp(twin)
+    P = np.array([[0.0, 1.0, -2.0], [0.0, -1.0, 2.0], [0.0, 0.0, 0.0]], np.float32)
+    picks = []
+    for other in (hidden, seen):
+        lights = LightSet([key, other], None, 0)
+        assert lights.num_entries == 2 and lights.tree is not None
+        picks.append(lights.tree.pdf(P, np.zeros(3, np.int64)))
+    np.testing.assert_array_equal(picks[0], picks[1])
+    assert 0.0 < picks[0].min() and picks[0].max() < 1.0
+    stand = LightSet([key, hidden], None, 0).hidden_lamps[0]
+    b, own = stand.bounds(), hidden.bounds()
+    assert b.energy == own.energy > 0 and (b.lo == own.lo).all() and (b.hi == own.hi).all()
+    assert not (stand.seen_by_bsdf or stand.seen_by_camera or stand.seen_by_transmission)
+    s = stand.sample(P, np.full(3, 0.5, np.float32), np.full(3, 0.5, np.float32))
+    assert not s.value.any()
+    assert LightSet([key], None, 0).num_entries == 1
+
+
 # --- choosing a light per shading point ---------------------------------------------------------
 
 def test_light_choice_favours_lights_bsdf_sampling_misses():
