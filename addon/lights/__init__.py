@@ -20,8 +20,8 @@ every light is known, so a BSDF ray that meets a light can be weighted against l
 Lamps with diffuse ray visibility off light no diffuse surface (camera rays may see them) but,
 as in Cycles, keep their share of that choice, as stand-ins whose samples give nothing
 (choiceonly.py). The (uniform) world takes no part in it: BSDF rays alone collect it, with
-weight 1, as in Cycles (background.py says why). An environment map, which varies over directions, is a group of its
-own (environment.py), chosen last in the table.
+weight 1, as in Cycles (background.py says why). An environment map, which varies over
+directions, is a group of its own (environment.py), chosen last in the table.
 """
 from __future__ import annotations
 
