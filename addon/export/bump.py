@@ -37,11 +37,32 @@ def bump_nodes(socket):
     return nodes, socket
 
 
-# The BSDFs Cycles 5.0.1 renders black where a Bump of NaN Distance (a script's) with its Height
-# linked bends them, its normal NaN (measured on a lit plane, 64 spp: Diffuse, Glossy,
-# Translucent and Principled 0; the material's emission, transparency and unbent BSDFs kept). A
-# Glass or Sheen is not black there (0.02 and 0.28 of DACRT's 0.45 and 0.40): left as before, said
-NAN_BUMP_BLACKENS = frozenset({'BSDF_DIFFUSE', 'BSDF_GLOSSY', 'BSDF_TRANSLUCENT', 'BSDF_PRINCIPLED'})
+# What Cycles 5.0.1 renders of a BSDF that a Bump of NaN Distance (a script's) with its Height linked
+# bends, its normal NaN (measured: a smooth sphere under a uniform 0.5 world seen by an orthographic
+# camera, 64 spp, each BSDF alone and in a Mix with an unbent Diffuse; README):
+# - 'own': a Diffuse, Translucent or Refraction BSDF, a velvet (Ashikhmin) Sheen: black, the
+#   material's other BSDFs kept (its evaluation is 0);
+# - 'all': a Glossy, Glass or Principled of roughness from 0.005 on: black, and every other BSDF
+#   of the material with it (its evaluation is NaN, which spoils the sum Cycles lights the point
+#   by; a rough Glossy Mixed with an unbent Diffuse 0 where DACRT had kept the Diffuse's half);
+#   emission and transparency are kept;
+# - 'sharp': roughness up to 0.003: its reflection at normal incidence, of what its NaN reflected
+#   ray meets (the world's colour whatever the scene: a Glass F0 x colour, 0.020 for IOR 1.5 and
+#   0.125 for 3 under the 0.5 world; a Glossy as unbent, 0.40; under a sun and a black world, the
+#   sun's disk: 1812): a Glass renders F0 x colour, as in a uniform world, a Principled black
+#   (Cycles keeps its specular's 0.02 of a 0.5 world), both said; a sharp Glossy is lit unbent.
+# A microfiber Sheen renders brighter (0.278 where unbent 0.048): left as before, said.
+NAN_BUMP_BSDFS = frozenset({'BSDF_DIFFUSE', 'BSDF_GLOSSY', 'BSDF_TRANSLUCENT', 'BSDF_PRINCIPLED', 'BSDF_GLASS',
+                            'BSDF_REFRACTION', 'BSDF_SHEEN'})
+# (roughness 0.003 rendered sharp, 0.005 and 0.01 rough: a Glossy, a Glass)
+NAN_BUMP_SHARP_BELOW = 0.004
+
+
+def _sharp(node, name):
+    """Whether a BSDF's roughness input `name` is a constant Cycles renders sharp under a NaN
+    normal (NAN_BUMP_SHARP_BELOW); None where nodes compute it."""
+    rough, constant = constant_value(node.inputs[name])
+    return rough < NAN_BUMP_SHARP_BELOW if constant else None
 
 
 def nan_distance_bump(socket):
@@ -54,23 +75,39 @@ def nan_distance_bump(socket):
     return None
 
 
-def blackened_by_nan_bump(bsdf):
-    """Whether a BSDF node bent by a Bump of NaN Distance is rendered black as Cycles renders it
-    (NAN_BUMP_BLACKENS): a Principled only without emission and alpha, which take no normal and
-    which Cycles keeps (the closure here has no part to keep them apart)."""
-    if bsdf.type not in NAN_BUMP_BLACKENS:
-        return False
-    if bsdf.type == 'BSDF_PRINCIPLED':
-        alpha, a_const = constant_value(bsdf.inputs['Alpha'])
-        strength, s_const = constant_value(bsdf.inputs['Emission Strength'])
-        return a_const and alpha >= 1.0 and s_const and strength == 0.0
-    return True
+def nan_bump_effect(bsdf):
+    """What Cycles renders of a BSDF node bent by a Bump of NaN Distance, as DACRT renders it (see
+    NAN_BUMP_BSDFS): 'own' (it black), 'all' (it and the material's other BSDFs black), 'sharp'
+    (a Glass's reflection F0 x colour, a Principled black), or None (left as before, said: a
+    sharp Glossy, a microfiber Sheen, a roughness nodes compute, and a Principled with emission
+    or alpha, which Cycles keeps and which the closure here cannot keep apart from its BSDFs)."""
+    t = bsdf.type
+    if t in ('BSDF_DIFFUSE', 'BSDF_TRANSLUCENT', 'BSDF_REFRACTION'):
+        return 'own'
+    if t == 'BSDF_SHEEN':
+        return 'own' if getattr(bsdf, 'distribution', 'MICROFIBER') == 'ASHIKHMIN' else None
+    if t == 'BSDF_GLOSSY':
+        return 'all' if _sharp(bsdf, 'Roughness') is False else None
+    if t == 'BSDF_GLASS':
+        return {False: 'all', True: 'sharp'}.get(_sharp(bsdf, 'Roughness'))
+    if t != 'BSDF_PRINCIPLED':
+        return None
+    alpha, a_const = constant_value(bsdf.inputs['Alpha'])
+    strength, s_const = constant_value(bsdf.inputs['Emission Strength'])
+    if not (a_const and alpha >= 1.0 and s_const and strength == 0.0):
+        return None
+    coat, c_const = constant_value(bsdf.inputs['Coat Weight'])
+    sharp = [_sharp(bsdf, 'Roughness')] + ([_sharp(bsdf, 'Coat Roughness')] if not (c_const and coat == 0.0) else [])
+    if False in sharp:
+        return 'all'
+    return 'sharp' if None not in sharp else 'own'
 
 
 def nan_bump_all_blackened(bump, depth=0):
     """Whether the Bump bends (bends) and every BSDF its Normal output bends (directly or through
-    other Bumps' Normal) is one blackened_by_nan_bump renders black: its NaN then needs no other
-    word. (A Bump that does not bend is passed over, so nothing is blackened: its NaN is said.)"""
+    other Bumps' Normal) is one whose NaN bend nan_bump_effect renders and says: its NaN then
+    needs no other word. (A Bump that does not bend is passed over, so nothing is
+    blackened: its NaN is said.)"""
     links = [link for link in bump.outputs['Normal'].links if not link.is_muted]
     if not links or depth > 64 or not bends(bump):
         return False
@@ -78,7 +115,7 @@ def nan_bump_all_blackened(bump, depth=0):
         to = link.to_node
         if link.to_socket.identifier != 'Normal':
             return False
-        if not (blackened_by_nan_bump(to) or (to.type == 'BUMP' and nan_bump_all_blackened(to, depth + 1))):
+        if not (nan_bump_effect(to) is not None or (to.type == 'BUMP' and nan_bump_all_blackened(to, depth + 1))):
             return False
     return True
 

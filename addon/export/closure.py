@@ -212,6 +212,17 @@ class Closure:
         k, t, w = self.passes
         return out._with_passes((k * f, t, w * f))
 
+    def emission_only(self):
+        """Its emission (and a Holdout's weight) alone: what Cycles keeps of a shading point whose
+        BSDF evaluation is NaN (bump.nan_bump_effect 'all'), its BSDFs and transparency black;
+        None where per-point factors weigh its parts (Cycles blackens only where that BSDF has
+        weight)."""
+        if self.opacity is not None or self.per_point_sum or self.side_weights is not None \
+                or self.translucent_tex is not None:
+            return None
+        return Closure(emission=self.emission, emission_tex=self.emission_tex, holdout=self.holdout,
+                       light_emission=self.light_emission)
+
     def only_transparent(self):
         return bool(self.transparent.any()) and not (self.const.any() or self.emission.any() or
                                                       self.tex_weight.any() or self.holdout or self.opacity or

@@ -438,6 +438,7 @@ class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBak
         self._portal = False          # a Ray Portal BSDF passes rays: shadow rays stop at it
         self._dark_stand_ins = []     # what each emission that reads 0 only by a stand-in said
         self._rough_seen = False      # a rough Diffuse BSDF was read (shaders.py)
+        self._nan_spoiled = []        # the BSDFs whose NaN-bumped evaluation blackens the point (shaders.py)
         visibility = sd.VIS_CAMERA | sd.VIS_DIFFUSE | sd.VIS_SHADOW
         name = mat.original.name if mat.original else mat.name
         ntree = mat.node_tree
@@ -526,6 +527,7 @@ class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBak
                 if closure is None:
                     closure = self._shader(out.inputs['Surface'], reasons, 0)
                 glass_rough = glass_roughness(out.inputs['Surface'])
+                closure = self._nan_spoiled_closure(closure, reasons)
             for socket in IGNORED_OUTPUTS:
                 if out is not None and out.inputs.get(socket) is not None and \
                         linked_node(out.inputs[socket]) is not None:

@@ -12,9 +12,10 @@ from .. import scenedata as sd
 from .. import nodegraph
 from ..nodeeval import constant_color, constant_value
 from ..nodegraph import input_socket, linked_link
+from ..specular import f0_from_ior
 from ..texture import ImageTexels, LazyTexels, stored_texels
 from . import metallicmaps, pointnormals, procedurals
-from .bump import NAN_BUMP_BLACKENS, blackened_by_nan_bump, nan_distance_bump
+from .bump import NAN_BUMP_BSDFS, nan_bump_effect, nan_distance_bump
 from .closure import Closure, Texture, is_image_alpha
 from .cutouts import MISSING_ALPHA
 from .images import MISSING_IMAGE
@@ -84,6 +85,48 @@ class ShaderClosures:
         a Mix Shader of constant Fac <= 0 / >= 1 is its one shader, an empty Emission nothing."""
         return nodegraph.closure_link(socket, self._folder())
 
+    def _nan_bent(self, node, bump, effect, reasons):
+        """The closure of a BSDF bent by a Bump of NaN Distance (its normal NaN in Cycles), as
+        Cycles renders it (bump.nan_bump_effect): black, with the material's other BSDFs where
+        its NaN evaluation spoils the point's (self._nan_spoiled), or a sharp Glass's reflection
+        at normal incidence. (A BSDF bent so had been lit unbent: a plane 0.40 where Cycles is 0.)"""
+        what = f"{node.bl_label} '{node.name}' bent by Bump '{bump}' of NaN Distance"
+        if effect == 'all':
+            self._nan_spoiled.append(what)
+            return Closure()
+        if effect == 'own':
+            reasons.append(f"{what} renders black, as in Cycles (its bumped normal NaN)")
+            return Closure()
+        if node.type == 'BSDF_PRINCIPLED':
+            reasons.append(f"{what} renders black; Cycles keeps its sharp reflection at normal incidence of "
+                           "what its NaN reflected ray meets (0.02 of a 0.5 world at IOR 1.5; a sun's disk)")
+            return Closure()
+        ior, _ = constant_value(node.inputs['IOR'])
+        color, _ = constant_color(node.inputs['Color'])
+        reasons.append(f"{what}: its refraction black and its reflection at normal incidence (F0 x colour) "
+                       "lit as a diffuse, as in Cycles under a uniform world (its reflected ray NaN, Cycles' "
+                       "meets the world's colour whatever the scene, or a sun's disk)")
+        f0 = f0_from_ior(ior) if np.isfinite(ior) else 0.0
+        return Closure(const=np.clip(np.nan_to_num(np.asarray(color[:3], np.float64)), 0.0, 1.0) * f0)
+
+    def _nan_spoiled_closure(self, closure, reasons):
+        """The material's surface closure where a BSDF bent by a Bump of NaN Distance spoils the
+        point's BSDF evaluation (_nan_bent 'all'): its emission alone, the other BSDFs and the
+        transparency black as in Cycles (measured: a rough Glossy Mixed with an unbent Diffuse 0,
+        with a Transparent 0 where the world showed through; an Add of an Emission kept)."""
+        if not self._nan_spoiled:
+            return closure
+        what = "; ".join(self._nan_spoiled)
+        kept = closure.emission_only()
+        if kept is None:
+            reasons.append(f"{what} renders black, as in Cycles (its bumped normal NaN); Cycles blackens the "
+                           "material's other BSDFs and transparency too where it has weight, which per-point "
+                           "Mix factors leave lit here")
+            return closure
+        reasons.append(f"{what} renders black with the material's other BSDFs and transparency, as in Cycles "
+                       "(its bumped normal NaN spoils the point's shading; emission kept)")
+        return kept
+
     def _shader(self, socket, reasons, depth):
         # muted nodes are passed through (nodegraph); folded as Cycles folds the closures, so
         # only what renders is read and said (a Mix of Fac 0 had said "Glossy BSDF as diffuse"
@@ -103,14 +146,11 @@ class ShaderClosures:
             reasons.append("shader graph too deep")
             return Closure(const=DEFAULT_ALBEDO)
         t = node.type
-        if t in NAN_BUMP_BLACKENS and blackened_by_nan_bump(node):
-            bump = nan_distance_bump(node.inputs.get('Normal'))
+        if t in NAN_BUMP_BSDFS:
+            effect = nan_bump_effect(node)
+            bump = nan_distance_bump(node.inputs.get('Normal')) if effect is not None else None
             if bump is not None:
-                # (its normal NaN in Cycles: this BSDF black, the rest kept; it had been lit
-                # unbent, a plane 0.40 where Cycles is 0)
-                reasons.append(f"{node.bl_label} '{node.name}' bent by Bump '{bump}' of NaN Distance renders "
-                               "black, as in Cycles (its bumped normal NaN)")
-                return Closure()
+                return self._nan_bent(node, bump, effect, reasons)
         if t == 'BSDF_DIFFUSE':
             self._normal_input(node, reasons)
             c = _clamped_weight(self._color_closure(node.inputs['Color'], reasons))
