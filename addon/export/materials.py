@@ -483,7 +483,10 @@ class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBak
             # unnamed). Which node computes is asked of each node, as for a world's or a light's
             # (by node type here, a Mix of floats had made the tree's non-uniform Mix computed)
             found = nan_found(ntree, used, grouped)
-            said_apart = set(apart) | set(through)
+            # (a Bump's NaN Distance bending only BSDFs shaders.py renders and says as Cycles
+            # renders them: said there, not as read as 0, which it had been)
+            bent = _nan_inputs_named(ntree, {'BUMP': ('Distance',)}, lambda n: rendered(n) and nan_bump_all_blackened(n))
+            said_apart = set(apart) | set(through) | set(bent)
             for bad, said in (([b for node, b, _, c in found
                                 if not c and node.type not in PROCEDURAL_TYPES and b not in said_apart],
                                "NaN read as 0 (as Cycles clamps it) for {}"),

@@ -69,6 +69,29 @@ def _clamped_weight(c):
     return c
 
 
+# (a BSDF whose NaN evaluation spoils the point under a Mix factor nodes compute, a Light Path's
+# or a texture's: Cycles allocates no closure where its weight is 0, so the rest is kept there)
+NAN_SPOILS_WHERE_WEIGHED = ("Cycles blackens the material's other BSDFs and transparency too where it has "
+                            "weight, which a Mix factor nodes compute leaves lit here")
+
+
+def weighed_alike(node, depth=0):
+    """Whether every way from a shader node's output to the Material Output passes Add Shaders,
+    reroutes and Mix Shaders of unlinked factor only: its weight is the same at every point and ray."""
+    links = [link for link in node.outputs[0].links if not link.is_muted]
+    if not links or depth > 64:
+        return False
+    for link in links:
+        to = link.to_node
+        if to.type == 'OUTPUT_MATERIAL':
+            continue
+        if to.type == 'MIX_SHADER' and linked_link(to.inputs['Fac']) is not None:
+            return False
+        if to.type not in ('MIX_SHADER', 'ADD_SHADER', 'REROUTE') or not weighed_alike(to, depth + 1):
+            return False
+    return True
+
+
 class ShaderClosures:
     """A mixin of materials.MaterialBuilder (see the module docstring): its methods read and
     set the builder's state."""
@@ -91,11 +114,12 @@ class ShaderClosures:
         its NaN evaluation spoils the point's (self._nan_spoiled), or a sharp Glass's reflection
         at normal incidence. (A BSDF bent so had been lit unbent: a plane 0.40 where Cycles is 0.)"""
         what = f"{node.bl_label} '{node.name}' bent by Bump '{bump}' of NaN Distance"
-        if effect == 'all':
+        if effect == 'all' and weighed_alike(node):
             self._nan_spoiled.append(what)
             return Closure()
-        if effect == 'own':
-            reasons.append(f"{what} renders black, as in Cycles (its bumped normal NaN)")
+        if effect in ('own', 'all'):
+            reasons.append(f"{what} renders black, as in Cycles (its bumped normal NaN)" +
+                           (f"; {NAN_SPOILS_WHERE_WEIGHED}" if effect == 'all' else ""))
             return Closure()
         if node.type == 'BSDF_PRINCIPLED':
             reasons.append(f"{what} renders black; Cycles keeps its sharp reflection at normal incidence of "
@@ -116,12 +140,10 @@ class ShaderClosures:
         with a Transparent 0 where the world showed through; an Add of an Emission kept)."""
         if not self._nan_spoiled:
             return closure
-        what = "; ".join(self._nan_spoiled)
+        what = "; ".join(dict.fromkeys(self._nan_spoiled))
         kept = closure.emission_only()
         if kept is None:
-            reasons.append(f"{what} renders black, as in Cycles (its bumped normal NaN); Cycles blackens the "
-                           "material's other BSDFs and transparency too where it has weight, which per-point "
-                           "Mix factors leave lit here")
+            reasons.append(f"{what} renders black, as in Cycles (its bumped normal NaN); {NAN_SPOILS_WHERE_WEIGHED}")
             return closure
         reasons.append(f"{what} renders black with the material's other BSDFs and transparency, as in Cycles "
                        "(its bumped normal NaN spoils the point's shading; emission kept)")

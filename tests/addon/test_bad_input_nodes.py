@@ -514,7 +514,49 @@ def test_a_bsdf_bent_by_a_nan_distance_bump_is_black_as_in_cycles(scene, said, c
     assert np.allclose(mean, want, atol=2e-3), mean
     text = " | ".join(said)
     assert "Diffuse BSDF 'Diffuse BSDF' bent by Bump 'Bump' of NaN Distance renders black, as in Cycles" in text, text
-    assert "NaN read as 0 for 'Distance'" not in text, text
+    # (nor "read as 0 (as Cycles clamps it)", the words for a constant Height, which it had got)
+    assert "'Distance' of 'Bump'" not in text, text
+
+
+@pytest.mark.parametrize("factor, want", [
+    ('constant', (0.0, 0.0, 0.0)),             # Cycles 0: the Glossy's NaN spoils the point's sum
+    ('camera ray', (0.1, 0.4, 0.1)),           # the camera's rays shade with the Diffuse alone
+    ('checker', None),                          # per point: the Diffuse's cells kept, said
+])
+def test_a_rough_glossy_bent_by_a_nan_distance_bump_blackens_the_material(scene, said, factor, want):
+    """A rough Glossy (0.5) bent by a Bump of NaN Distance Mixed with an unbent Diffuse (0.2, 0.8,
+    0.2): Cycles 5.0.1 renders the point black, the Diffuse too (tests/parity/
+    test_nan_bump_closures.py), where DACRT had kept the Diffuse's half. Under a Light Path mix
+    (Is Camera Ray: the camera sees the Diffuse alone) or a factor per point, the Diffuse stays lit
+    where the Glossy has no weight, said."""
+    mat, nt, d, out = scenes.small_view(scene, **_GREY_LIT)
+    d.inputs['Color'].default_value = (0.2, 0.8, 0.2, 1.0)
+    b = nt.nodes.new('ShaderNodeBump')
+    b.inputs['Distance'].default_value = NAN
+    nt.links.new(nt.nodes.new('ShaderNodeTexWave').outputs['Fac'], b.inputs['Height'])
+    g = nt.nodes.new('ShaderNodeBsdfAnisotropic')
+    g.inputs['Roughness'].default_value = 0.5
+    nt.links.new(b.outputs['Normal'], g.inputs['Normal'])
+    mix = nt.nodes.new('ShaderNodeMixShader')
+    if factor == 'camera ray':
+        nt.links.new(nt.nodes.new('ShaderNodeLightPath').outputs['Is Camera Ray'], mix.inputs[0])
+    elif factor == 'checker':
+        nt.links.new(nt.nodes.new('ShaderNodeTexChecker').outputs['Fac'], mix.inputs[0])
+    nt.links.new(g.outputs[0], mix.inputs[1])
+    nt.links.new(d.outputs[0], mix.inputs[2])
+    nt.links.new(mix.outputs[0], out.inputs['Surface'])
+    scenes.plane("Plane", size=10, materials=(mat,))
+    img = scenes.render_rgba(scene)[..., :3].reshape(-1, 3)
+    text = " | ".join(said)
+    assert "Glossy BSDF 'Glossy BSDF' bent by Bump 'Bump' of NaN Distance renders black" in text, text
+    if want is not None:
+        assert np.allclose(img.mean(0), want, atol=2e-3), img.mean(0)
+    else:
+        assert img.max() > 0.04 and img.min() < 1e-3, img      # (the Diffuse's cells lit, the Glossy's black)
+    spoiled = "with the material's other BSDFs and transparency" in text
+    assert spoiled == (factor == 'constant'), text
+    assert spoiled or "Cycles blackens the material's other BSDFs and transparency too where it has weight" in text
+    assert "'Distance' of 'Bump'" not in text, text        # (its NaN said once, as rendered)
 
 
 def test_bump_nan_distance_of_constant_height_is_read_as_0(scene, said):
