@@ -38,7 +38,8 @@ def _bsdf(nt, kind, roughness):
 def _sphere_mean(kind, roughness, beside):
     """{engine: mean RGB} of the sphere scene whose BSDF `kind` (of `roughness`) is bent by the
     NaN Bump, alone or Mixed half and half with `beside` (an unbent Diffuse or a Transparent of
-    (0.2, 0.8, 0.2)), or with an Emission of it Added."""
+    (0.2, 0.8, 0.2)), or with an Emission of it Added; 'diffuse@camera' or '@checker': Mixed by
+    Is Camera Ray or a Checker's Fac."""
     bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x = sc.render.resolution_y = 16
@@ -49,7 +50,8 @@ def _sphere_mean(kind, roughness, beside):
     bent = _bsdf(nt, kind, roughness)
     nt.links.new(bump.outputs['Normal'], bent.inputs['Normal'])
     surface = bent.outputs[0]
-    if beside is not None:
+    beside, _, factor = (beside or '').partition('@')
+    if beside:
         other = nt.nodes.new({'diffuse': 'ShaderNodeBsdfDiffuse', 'transparent': 'ShaderNodeBsdfTransparent',
                               'emission': 'ShaderNodeEmission'}[beside])
         other.inputs['Color'].default_value = (0.2, 0.8, 0.2, 1.0)
@@ -57,6 +59,12 @@ def _sphere_mean(kind, roughness, beside):
         nt.links.new(surface, mix.inputs[len(mix.inputs) - 2])
         nt.links.new(other.outputs[0], mix.inputs[len(mix.inputs) - 1])
         surface = mix.outputs[0]
+        if factor == 'camera':
+            nt.links.new(nt.nodes.new('ShaderNodeLightPath').outputs['Is Camera Ray'], mix.inputs[0])
+        elif factor == 'checker':
+            checker = nt.nodes.new('ShaderNodeTexChecker')
+            checker.inputs['Scale'].default_value = 3.0
+            nt.links.new(checker.outputs['Fac'], mix.inputs[0])
     nt.links.new(surface, out.inputs['Surface'])
     bpy.ops.mesh.primitive_uv_sphere_add(radius=1.0, segments=32, ring_count=16)
     sphere = bpy.context.active_object
@@ -76,6 +84,8 @@ def _sphere_mean(kind, roughness, beside):
     ('glossy', 0.5, 'diffuse'),         # Cycles 0.13 (the background alone); DACRT had kept the Diffuse's half
     ('principled', None, 'transparent'),     # the transparency black too
     ('glossy', 0.5, 'emission'),        # the emission kept
+    ('glossy', 0.5, 'diffuse@camera'),  # the camera sees the Diffuse alone: kept
+    ('glossy', 0.5, 'diffuse@checker'),     # the Diffuse kept where the Glossy has no weight
     ('glass', 0.0, None),               # F0 x colour: 0.125 x (1, 0.5, 0.2) where DACRT had let the world through
     ('glass', 0.5, None),
     ('refraction', 0.0, 'diffuse'),     # black alone, the unbent Diffuse kept
