@@ -79,8 +79,9 @@ def nan_bump_effect(bsdf):
     """What Cycles renders of a BSDF node bent by a Bump of NaN Distance, as DACRT renders it (see
     NAN_BUMP_BSDFS): 'own' (it black), 'all' (it and the material's other BSDFs black), 'sharp'
     (a Glass's reflection F0 x colour, a Principled black), or None (left as before, said: a
-    sharp Glossy, a microfiber Sheen, a roughness nodes compute, and a Principled with emission
-    or alpha, which Cycles keeps and which the closure here cannot keep apart from its BSDFs)."""
+    sharp Glossy, a microfiber Sheen, a Glossy's or Glass's roughness nodes compute, and a
+    Principled with emission or alpha, which Cycles keeps and which the closure here cannot keep
+    apart from its BSDFs). A Principled whose roughness nodes compute is 'own', as before."""
     t = bsdf.type
     if t in ('BSDF_DIFFUSE', 'BSDF_TRANSLUCENT', 'BSDF_REFRACTION'):
         return 'own'

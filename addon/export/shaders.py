@@ -125,8 +125,10 @@ class ShaderClosures:
             reasons.append(f"{what} renders black; Cycles keeps its sharp reflection at normal incidence of "
                            "what its NaN reflected ray meets (0.02 of a 0.5 world at IOR 1.5; a sun's disk)")
             return Closure()
-        ior, _ = constant_value(node.inputs['IOR'])
-        color, _ = constant_color(node.inputs['Color'])
+        ior, i_ok = constant_value(node.inputs['IOR'])
+        color, c_ok = constant_color(node.inputs['Color'])
+        if not (i_ok and c_ok):
+            reasons.append("Glass BSDF inputs driven by nodes; their own values used")
         reasons.append(f"{what}: its refraction black and its reflection at normal incidence (F0 x colour) "
                        "lit as a diffuse, as in Cycles under a uniform world (its reflected ray NaN, Cycles' "
                        "meets the world's colour whatever the scene, or a sun's disk)")
