@@ -185,6 +185,7 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
             self.register_pass(scene, renderlayer, *args)
 
     def render(self, depsgraph):
+        self._result_begun = False
         try:
             import dacrt            # (loaded at registration: the add-on refuses to load without it)
             r = depsgraph.scene.render
@@ -206,6 +207,17 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
         except Exception as e:          # reported in Blender, never only printed
             traceback.print_exc()
             self.report({'ERROR'}, f"DACRT render failed: {e}")
+            return
+        self._stop_an_animation_left_without_a_frame(depsgraph)
+
+    def _stop_an_animation_left_without_a_frame(self, depsgraph):
+        """A frame of an animation cancelled (request_cancel: a script's or a signal's, which
+        Blender's test_break does not know) before its result was begun is reported as an error,
+        which stops the animation: Blender 5.0.1 would write the frame anyway, and its writer
+        crashes on a render without an image (a segfault in do_write_image_or_movie, PNG or EXR)."""
+        if self.is_animation and not self._result_begun and self.cancel_requested() and not self.test_break():
+            self.report({'ERROR'}, f"DACRT: render cancelled at frame {depsgraph.scene.frame_current} of the "
+                                   "animation, before it had an image: the animation stops here")
 
     # --- the viewport (3D viewport in Rendered shading) ---------------------------------
     def view_update(self, context, depsgraph):
@@ -326,6 +338,7 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
         x0, y0, x1, y1 = scene_data.camera.border
         # begin_result coordinates are relative to the render border's rect
         result = self.begin_result(0, 0, x1 - x0, y1 - y0, layer=layer)
+        self._result_begun = True
         # Cryptomatte names and manifests, stamped on the engine's full result as Cycles does
         for kind in scene_data.settings.cryptomatte:
             names = cryptomatte.layer_names(scene_data, kind)
