@@ -7,6 +7,7 @@
 #include "cameralanes.h"
 #include "parallel.h"
 #include "pathvertex.h"
+#include "raylanes.h"
 #include "shading.h"
 
 namespace dacrt {
@@ -147,8 +148,7 @@ void camera_rays(const CameraFrame& c, const float* rx, const float* ry, size_t 
     if (!c.ortho && !lens) {  // the common camera: its lane loop, then the records
         parallel_for(n, [&](size_t b, size_t e) {
             pinhole_lanes(c, rx, ry, b, e, n, O, D, tmax);
-            if (rays)
-                for (size_t i = b; i < e; ++i) ray_record(O, D, n, i, tmax[i], rays[i]);
+            if (rays) ray_records_lanes(O, D, n, b, e, tmax, 0.0f, rays);
         }, size_t(1) << 16);
         return;
     }

@@ -317,15 +317,15 @@ namespace {
 
 // Block k's c shadow rays (at k * kEventBlock) moved to follow the blocks before, from m on,
 // with send and skip; each ray's id is its index: event_block wrote those of rays left in place,
-// a moved ray's is set as it moves (no pass over all the rays after).
+// a moved ray's is set after the move, on lines it has just written. (Moved one at a time with
+// the id set on the way, the generic build took the records apart into scalar stores: 4% of
+// shade_bounce's perf samples on a Cornell render's calls, beside the memmove of send.)
 void move_block(const NextEventOut& out, size_t k, size_t c, size_t m) {
     const size_t src = k * kEventBlock;
     if (src == m || !c) return;  // (m < src: a block's rays only move toward the front)
-    for (size_t d = 0; d < c; ++d) {
-        Ray r = out.rays[src + d];
-        r.id = uint32_t(m + d);
-        out.rays[m + d] = r;
-    }
+    Ray* const rays = out.rays;
+    std::memmove(rays + m, rays + src, c * sizeof(Ray));
+    for (size_t d = 0; d < c; ++d) rays[m + d].id = uint32_t(m + d);
     std::memmove(out.send + m, out.send + src, c * sizeof(int64_t));
     if (out.skip) std::memmove(out.skip + m, out.skip + src, c * sizeof(int32_t));
 }

@@ -295,19 +295,6 @@ inline void ray_record(const float* O, const float* D, size_t n, size_t i, float
     r.id = uint32_t(i);
 }
 
-// ray_record of rays b..e-1, all with tfar. Its pointers are parameters, so the records' stores
-// cannot be taken for writes to them: called from a lambda with captured references (a pass's
-// per-chunk body), every pointer and n had been loaded again for each ray, the whole record
-// written as eight scalar stores after the reloads (the bounce rays' loop: ~6% of
-// shade_bounce's perf samples on a Cornell render's calls).
-inline void ray_records(const float* O, const float* D, size_t n, size_t b, size_t e, float tfar, Ray* rays) {
-    for (size_t i = b; i < e; ++i) {
-        Ray r;
-        ray_record(O, D, n, i, tfar, r);
-        rays[i] = r;
-    }
-}
-
 // The shadow ray from O along wi over dist or, with a target (non-null, not NaN), toward it
 // over that distance x shorten. False (record tfar 0, never occluded) for a zero-length ray.
 inline bool shadow_record(const float O[3], const float wi[3], float dist, const float* target, float shorten,

@@ -6,6 +6,7 @@
 #include "parallel.h"
 #include "pathvertex.h"
 #include "random.h"
+#include "raylanes.h"
 #include "scatterlanes.h"
 #include "shading.h"
 
@@ -56,7 +57,7 @@ void scatter_range(const uint32_t* keys, size_t n, uint32_t ka, uint32_t kb, con
                     }
                 }
         if (rays)  // the bounce rays' records, ready for the tracer
-            ray_records(O, wi, n, i0, i0 + m, std::numeric_limits<float>::infinity(), rays);
+            ray_records_lanes(O, wi, n, i0, i0 + m, nullptr, std::numeric_limits<float>::infinity(), rays);
     });
 }
 

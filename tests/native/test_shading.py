@@ -69,6 +69,53 @@ def test_pack_rays_fields_and_ids():
         shading.pack_rays(O, D, tfar, out=np.empty(n - 1, dacrt.RAY_DTYPE))
 
 
+
+# A pinhole camera frame (camera_rays): rotation, position, orthographic base, raster map, tan(fov / 2),
+# clip start and range, then an aperture of 0 and the lens parameters it leaves unread.
+_FRAME = [1, 0, 0, 0, 1, 0, 0, 0, 1, 0.5, -2, 3, 0, 0, 0, -1, 2 / 160, -1, 2 / 120, 0.5, 0.1, 100, 0, 1, 0, 0, 1]
+
+
+def test_ray_records_are_the_same_on_every_instruction_set():
+    """The records are written 8 at a time from the columns (native/cpp/raylanes.cpp: a copy per
+    instruction set, DACRT_ISA picks one in a new process) and one at a time for the rest: every
+    field moved as it is (NaN payloads, -0 and infinities included), ids the indices, from
+    pack_rays (per-ray tfar, split over threads at odd places), camera_rays and the bounce rays of
+    cosine_scatter (constant tfar, chunks of the sample words), on lengths around 8's multiples."""
+    code = ("import sys, numpy as np, dacrt; from dacrt import shading; "
+            "O, D, t, keys, rx, ry = (np.load(f) for f in sys.argv[1:7]); out = []\n"
+            "for n in (1, 7, 8, 9, 15, 16, 17, 517, 131079, O.shape[1]):\n"
+            "    out.append(shading.pack_rays(np.ascontiguousarray(O[:, :n]), np.ascontiguousarray(D[:, :n]), t[:n]))\n"
+            "ns = D / np.linalg.norm(D, axis=0)\n"
+            "out.append(shading.cosine_scatter(keys, 5, 6, ns.astype(np.float32), origins=O)[3])\n"
+            "cam = shading.camera_rays(False, np.float32(%r), rx, ry, records=True)\n"
+            "out.append(cam[3]); out.append(shading.pack_rays(cam[0], cam[1], cam[2]))\n"
+            "np.save(sys.argv[7], np.concatenate(out).view(np.uint8))") % (_FRAME,)
+    rng = np.random.default_rng(21)
+    n = 131_083                                 # past pack_rays' 2^17 split, not a multiple of 8
+    O, D = rng.normal(size=(3, n)).astype(F32), _unit(rng, n)
+    O[0, 3], O[1, 5], O[2, 11] = np.nan, -0.0, np.inf
+    O.view(np.uint32)[1, 9] = 0x7FC01234        # a NaN with a payload: moved, not computed
+    tfar = rng.uniform(0, 10, n).astype(F32)
+    tfar[[2, 13, 130_000]] = np.inf, 0.0, np.nan
+    keys = rng.integers(0, 2 ** 32, (2, n), dtype=np.uint64).astype(np.uint32)
+    rx, ry = rng.uniform(0, 160, n).astype(F32), rng.uniform(0, 120, n).astype(F32)
+    out = outputs_per_isa(code, O, D, tfar, keys, rx, ry)
+    first = out['portable']
+    rays = first.view(dacrt.RAY_DTYPE)
+    start = sum((1, 7, 8, 9, 15, 16, 17, 517, 131079))
+    packed = rays[start:start + n]
+    assert packed.tobytes() == shading.pack_rays(O, D, tfar).tobytes()
+    assert (np.ascontiguousarray(packed["org"].T).view(np.uint32) == O.view(np.uint32)).all()
+    np.testing.assert_array_equal(packed["dir"], D.T)
+    assert packed["tfar"].view(np.uint32).tobytes() == tfar.view(np.uint32).tobytes()
+    np.testing.assert_array_equal(packed["id"], np.arange(n))
+    cam = rays[-2 * n:]                         # camera records, then pack_rays of their columns
+    assert cam[:n].tobytes() == cam[n:].tobytes()
+    assert np.isfinite(cam["dir"]).all()
+    for isa, v in out.items():
+        assert v.tobytes() == first.tobytes(), isa
+
+
 @pytest.mark.parametrize("smooth", [False, True])
 @pytest.mark.parametrize("select", [False, True])
 def test_surface_matches_float64(smooth, select):
