@@ -809,6 +809,62 @@ DACRT_PICK_ISA(portable, )
 DACRT_PICK_ISA(avx2, __attribute__((target("avx2,fma,bmi,bmi2"))))
 DACRT_PICK_ISA(avx512, __attribute__((target("avx2,fma,bmi,bmi2,avx512f,avx512vl,avx512dq,avx512bw,avx512cd"))))
 
+// A stop's target sums for the walks [0, m) from its lanes' row weighs (r.g, r.gmin): each
+// target's summed importance t[j][i] = e_a g_a + e_c g_c (its lanes' energies times their weighs,
+// in float64; a target of one lane e_a g_a alone, none 0) and smallest tm[j][i] likewise; and
+// per four lanes whether all their distances lay in float's range at walk i (r.fours: the filled
+// lanes' ok ANDed, an empty lane among 4-7 by lane 0's, see walk_rows). Elementwise IEEE
+// operations (no contraction), so every copy gives the bits of the scalar passes it replaced;
+// copies per instruction set because the generic build ran them two doubles a vector (SSE2: a
+// quarter of walk_rows' perf samples, the point's ok rows ANDed another tenth).
+using TargetSumsFn = void (*)(const LightTree::Stop& q, LightTree::Rows& r, size_t m, bool empty_hi);
+inline __attribute__((always_inline)) void target_sums(const LightTree::Stop& q, LightTree::Rows& r, size_t m,
+                                                       bool empty_hi) {
+    for (int j = 0; j < 4; ++j) {
+        double* const t = r.t[j];
+        double* const tm = r.tm[j];
+        const int a = 2 * j, cl = 2 * j + 1;
+        if (q.target[j] < 0) {
+            for (size_t i = 0; i < m; ++i) t[i] = 0.0, tm[i] = 0.0;
+            continue;
+        }
+        const double ea = q.energy[a];
+        const float* const ga = r.g[a];
+        const float* const gma = r.gmin[a];
+        if (q.node[cl] < 0) {  // (+ an empty lane's 0.0: t >= +0 or NaN, the same; left out)
+            for (size_t i = 0; i < m; ++i) t[i] = ea * double(ga[i]);
+            for (size_t i = 0; i < m; ++i) tm[i] = ea * double(gma[i]);
+            continue;
+        }
+        const double ec = q.energy[cl];
+        const float* const gc = r.g[cl];
+        const float* const gmc = r.gmin[cl];
+        for (size_t i = 0; i < m; ++i) t[i] = ea * double(ga[i]) + ec * double(gc[i]);
+        for (size_t i = 0; i < m; ++i) tm[i] = ea * double(gma[i]) + ec * double(gmc[i]);
+    }
+    for (int h = 0; h < 2; ++h) {
+        int32_t* const f = r.fours[h];
+        const int32_t* ok[5];
+        int n = 0;
+        for (int k = 4 * h; k < 4 * h + 4; ++k)
+            if (q.node[k] >= 0) ok[n++] = r.ok[k];
+        if (h == 1 && empty_hi) ok[n++] = r.ok[0];
+        for (size_t i = 0; i < m; ++i) f[i] = -1;
+        for (int k = 0; k < n; ++k) {
+            const int32_t* const o = ok[k];
+            for (size_t i = 0; i < m; ++i) f[i] &= o[i];
+        }
+    }
+}
+
+#define DACRT_SUMS_ISA(NAME, TARGET)                                                                   \
+    TARGET void NAME##_sums(const LightTree::Stop& q, LightTree::Rows& r, size_t m, bool empty_hi) {   \
+        target_sums(q, r, m, empty_hi);                                                                \
+    }
+DACRT_SUMS_ISA(portable, )
+DACRT_SUMS_ISA(avx2, __attribute__((target("avx2,fma,bmi,bmi2"))))
+DACRT_SUMS_ISA(avx512, __attribute__((target("avx2,fma,bmi,bmi2,avx512f,avx512vl,avx512dq,avx512bw,avx512cd"))))
+
 }  // namespace
 
 // Point i's eight importances at stop q from its row weighs (an empty lane 0.0), and which of
@@ -895,36 +951,9 @@ void LightTree::walk_rows(Rows& r, size_t depth, size_t at, size_t b, size_t e, 
         // probs_of's steps pass by pass over the points (each target's summed importance, the
         // four walks of a stop whose distances left float's range redone, then the shares and
         // the pick), so that the walks overlap: the same operations per walk
-        for (int j = 0; j < 4; ++j) {
-            double* t = r.t[j];
-            double* tm = r.tm[j];
-            const int a = 2 * j, cl = 2 * j + 1;
-            if (q.target[j] < 0) {
-                std::fill(t, t + m, 0.0);
-                std::fill(tm, tm + m, 0.0);
-                continue;
-            }
-            const double ea = q.energy[a];
-            for (size_t i = 0; i < m; ++i) t[i] = ea * double(r.g[a][i]);
-            for (size_t i = 0; i < m; ++i) tm[i] = ea * double(r.gmin[a][i]);
-            if (q.node[cl] < 0) continue;  // (+ an empty lane's 0.0: t >= +0 or NaN, the same)
-            const double ec = q.energy[cl];
-            for (size_t i = 0; i < m; ++i) t[i] += ec * double(r.g[cl][i]);
-            for (size_t i = 0; i < m; ++i) tm[i] += ec * double(r.gmin[cl][i]);
-        }
-        // which fours left float's range at each walk: the filled lanes' ok rows ANDed per four
-        // in vectors (an empty lane among 4-7 by lane 0's), rather than eight tests per walk
+        static const TargetSumsFn sums = lane_copy<TargetSumsFn>(portable_sums, avx2_sums, avx512_sums);
+        sums(q, r, m, empty_hi);
         int32_t* const fours[2] = {r.fours[0], r.fours[1]};
-        std::fill(fours[0], fours[0] + m, -1);
-        std::fill(fours[1], fours[1] + m, -1);
-        for (int k = 0; k < 8; ++k) {
-            if (q.node[k] < 0) continue;
-            int32_t* const f = fours[k < 4 ? 0 : 1];
-            const int32_t* const ok = r.ok[k];
-            for (size_t i = 0; i < m; ++i) f[i] &= ok[i];
-        }
-        if (empty_hi)
-            for (size_t i = 0; i < m; ++i) fours[1][i] &= r.ok[0][i];
         for (size_t i = 0; i < m; ++i) {
             if ((fours[0][i] & fours[1][i]) == -1) continue;
             const int bad = (fours[0][i] ? 0 : 1) | (fours[1][i] ? 0 : 2);
@@ -948,6 +977,18 @@ void LightTree::walk_rows(Rows& r, size_t depth, size_t at, size_t b, size_t e, 
         }
         static const PickRowsFn pick = lane_copy<PickRowsFn>(portable_pick_rows, avx2_pick_rows, avx512_pick_rows);
         pick(r.t, r.tm, pe, c.u + b, c.lo + b, c.w + b, m, r.pick);
+    }
+    // where every target is a leaf (or none), each walk picks its light where it stands: the
+    // regroup below would copy its six rows, u, lo, w and id only for leaf_pick to read u, lo and
+    // w back (the last stop of most walks; leaf_pick reads the same values, so the same bits)
+    bool inner = false;
+    for (int j = 0; j < 4; ++j) inner |= q.target[j] >= 0 && nodes_[size_t(q.target[j])].child >= 0;
+    if (!inner) {
+        for (size_t i = 0; i < m; ++i) {
+            const size_t at_i = b + i, o = r.base + size_t(c.id[at_i]);
+            key[o] = leaf_pick(size_t(q.target[r.pick[i]]), c.u[at_i], c.lo[at_i], c.w[at_i], prob[o]);
+        }
+        return;
     }
     // the walks regrouped by target into the other rows: counts and cursors kept in registers
     // and chosen by masks (a histogram in memory, ++count[pick] and tmp[fill[pick]++], chained
