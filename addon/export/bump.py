@@ -79,9 +79,9 @@ def nan_bump_effect(bsdf):
     """What Cycles renders of a BSDF node bent by a Bump of NaN Distance, as DACRT renders it (see
     NAN_BUMP_BSDFS): 'own' (it black), 'all' (it and the material's other BSDFs black), 'sharp'
     (a Glass's reflection F0 x colour, a Principled black), or None (left as before, said: a
-    sharp Glossy, a microfiber Sheen, a Glossy's or Glass's roughness nodes compute, and a
-    Principled with emission or alpha, which Cycles keeps and which the closure here cannot keep
-    apart from its BSDFs). A Principled whose roughness nodes compute is 'own', as before."""
+    sharp Glossy, a microfiber Sheen, a Glossy's or Glass's roughness nodes compute, a Principled
+    of Alpha nodes compute or 0, and a sharp one with emission or alpha). A Principled whose
+    roughness nodes compute is 'own', as before."""
     t = bsdf.type
     if t in ('BSDF_DIFFUSE', 'BSDF_TRANSLUCENT', 'BSDF_REFRACTION'):
         return 'own'
@@ -94,13 +94,15 @@ def nan_bump_effect(bsdf):
     if t != 'BSDF_PRINCIPLED':
         return None
     alpha, a_const = constant_value(bsdf.inputs['Alpha'])
-    strength, s_const = constant_value(bsdf.inputs['Emission Strength'])
-    if not (a_const and alpha >= 1.0 and s_const and strength == 0.0):
+    if not (a_const and alpha > 0.0):
         return None
     coat, c_const = constant_value(bsdf.inputs['Coat Weight'])
     sharp = [_sharp(bsdf, 'Roughness')] + ([_sharp(bsdf, 'Coat Roughness')] if not (c_const and coat == 0.0) else [])
     if False in sharp:
-        return 'all'
+        return 'all'        # (its emission kept, by its alpha; its alpha's transparency black too)
+    strength, s_const = constant_value(bsdf.inputs['Emission Strength'])
+    if not (alpha >= 1.0 and s_const and strength == 0.0):
+        return None
     return 'sharp' if None not in sharp else 'own'
 
 

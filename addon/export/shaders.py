@@ -116,11 +116,11 @@ class ShaderClosures:
         what = f"{node.bl_label} '{node.name}' bent by Bump '{bump}' of NaN Distance"
         if effect == 'all' and weighed_alike(node):
             self._nan_spoiled.append(what)
-            return Closure()
+            return self._nan_kept(node, reasons)
         if effect in ('own', 'all'):
             reasons.append(f"{what} renders black, as in Cycles (its bumped normal NaN)" +
                            (f"; {NAN_SPOILS_WHERE_WEIGHED}" if effect == 'all' else ""))
-            return Closure()
+            return self._nan_kept(node, reasons)
         if node.type == 'BSDF_PRINCIPLED':
             reasons.append(f"{what} renders black; Cycles keeps its sharp reflection at normal incidence of "
                            "what its NaN reflected ray meets (0.02 of a 0.5 world at IOR 1.5; a sun's disk)")
@@ -134,6 +134,20 @@ class ShaderClosures:
                        "meets the world's colour whatever the scene, or a sun's disk)")
         f0 = f0_from_ior(ior) if np.isfinite(ior) else 0.0
         return Closure(const=np.clip(np.nan_to_num(np.asarray(color[:3], np.float64)), 0.0, 1.0) * f0)
+
+    def _nan_kept(self, node, reasons):
+        """What Cycles keeps of a BSDF node its NaN normal blackens: a Principled's emission (by
+        its alpha, under its coat and sheen), read without its normal (measured, a rough one of
+        Emission (0.2, 0.8, 0.2) x 1: that emission alone; at Alpha 0.5 half of it, and nothing
+        of the world through it), nothing of another's. (Only the emission's words are said.)"""
+        if node.type != 'BSDF_PRINCIPLED':
+            return Closure()
+        noted = len(self._normal_parts), len(self._normals), len(self._normal_points)
+        notes = []
+        c = self._principled(node, notes)
+        self._forget_normals(noted)
+        reasons.extend(n for n in notes if "mission" in n)
+        return Closure(emission=c.emission, emission_tex=c.emission_tex, light_emission=c.light_emission)
 
     def _nan_spoiled_closure(self, closure, reasons):
         """The material's surface closure where a BSDF bent by a Bump of NaN Distance spoils the

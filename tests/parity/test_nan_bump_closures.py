@@ -1,13 +1,14 @@
 """What Cycles renders of the BSDFs a Bump of NaN Distance (a script's) with its Height linked bends,
 its normal NaN, against DACRT (export/bump.py nan_bump_effect, shaders._nan_bent): a rough Glossy,
 Glass or Principled blackens the material's other BSDFs and its transparency with it (its NaN
-evaluation spoils the point's), a Refraction or a velvet Sheen only itself, a sharp Glass keeps
-its reflection at normal incidence (F0 x colour, of the uniform world its NaN reflected ray meets),
-a sharp Glossy renders as unbent. Before, DACRT blackened only a bent Diffuse, Glossy, Translucent
-or Principled itself (a rough Glossy in a Mix with an unbent Diffuse kept the Diffuse's half, a
-sharp Glossy black where Cycles' is 0.40) and lit a Glass, Refraction or Sheen unbent (a Glass 0.5
-where Cycles' is 0.02). A smooth sphere under a uniform 0.5 world seen by an orthographic camera
-(every view angle), the image's mean."""
+evaluation spoils the point's), a rough Principled keeping its emission (by its alpha); a
+Refraction or a velvet Sheen blackens only itself; a sharp Glass keeps its reflection at normal
+incidence (F0 x colour, of the uniform world its NaN reflected ray meets), a sharp Glossy renders
+as unbent. Before, DACRT blackened only a bent Diffuse, Glossy, Translucent or Principled itself (a
+rough Glossy in a Mix with an unbent Diffuse kept the Diffuse's half, a sharp Glossy black where
+Cycles' is 0.40) and lit a Glass, Refraction, Sheen or a Principled with emission or alpha unbent
+(a Glass 0.5 where Cycles' is 0.02). A smooth sphere under a uniform 0.5 world seen by an
+orthographic camera (every view angle), the image's mean."""
 import bpy
 import numpy as np
 import pytest
@@ -24,12 +25,16 @@ NAN = float('nan')
 def _bsdf(nt, kind, roughness):
     node = nt.nodes.new({'glossy': 'ShaderNodeBsdfAnisotropic', 'glass': 'ShaderNodeBsdfGlass',
                          'refraction': 'ShaderNodeBsdfRefraction', 'velvet': 'ShaderNodeBsdfSheen',
-                         'principled': 'ShaderNodeBsdfPrincipled'}[kind])
+                         'principled': 'ShaderNodeBsdfPrincipled', 'emitting': 'ShaderNodeBsdfPrincipled'}[kind])
     if kind == 'velvet':
         node.distribution = 'ASHIKHMIN'
     elif kind == 'glass':
         node.inputs['IOR'].default_value = 3.0         # F0 0.25
         node.inputs['Color'].default_value = (1.0, 0.5, 0.2, 1.0)
+    elif kind == 'emitting':     # a Principled of Emission (0.2, 0.8, 0.2) x 1 and Alpha 0.5
+        node.inputs['Emission Color'].default_value = (0.2, 0.8, 0.2, 1.0)
+        node.inputs['Emission Strength'].default_value = 1.0
+        node.inputs['Alpha'].default_value = 0.5
     if roughness is not None:
         node.inputs['Roughness'].default_value = roughness
     return node
@@ -83,6 +88,7 @@ def _sphere_mean(kind, roughness, beside):
 @pytest.mark.parametrize("kind, roughness, beside", [
     ('glossy', 0.5, 'diffuse'),         # Cycles 0.13 (the background alone); DACRT had kept the Diffuse's half
     ('principled', None, 'transparent'),     # the transparency black too
+    ('emitting', None, None),           # its emission kept, by its alpha; nothing seen through it
     ('glossy', 0.5, 'emission'),        # the emission kept
     ('glossy', 0.5, 'diffuse@camera'),  # the camera sees the Diffuse alone: kept
     ('glossy', 0.5, 'diffuse@checker'),     # the Diffuse kept where the Glossy has no weight
