@@ -816,7 +816,7 @@ DACRT_PICK_ISA(avx512, __attribute__((target("avx2,fma,bmi,bmi2,avx512f,avx512vl
 // lanes' ok ANDed, an empty lane among 4-7 by lane 0's, see walk_rows). Elementwise IEEE
 // operations (no contraction), so every copy gives the bits of the scalar passes it replaced;
 // copies per instruction set because the generic build ran them two doubles a vector (SSE2: a
-// quarter of walk_rows' perf samples, the point's ok rows ANDed another tenth).
+// quarter of walk_rows' perf samples, the lanes' ok rows ANDed another tenth).
 using TargetSumsFn = void (*)(const LightTree::Stop& q, LightTree::Rows& r, size_t m, bool empty_hi);
 inline __attribute__((always_inline)) void target_sums(const LightTree::Stop& q, LightTree::Rows& r, size_t m,
                                                        bool empty_hi) {
