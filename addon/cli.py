@@ -299,6 +299,9 @@ def render(args):
         try:
             bpy.ops.render.render(write_still=False, scene=scene.name)
         except RuntimeError as e:     # the engine reported an ERROR: the render failed
+            if interrupted:           # (Ctrl-C before the frame had an image: nothing to write)
+                print("DACRT: interrupted before the frame had an image; nothing written")
+                raise SystemExit(130)
             raise SystemExit(f"error: render failed: {e}")
     try:
         written = save_render(scene, png, exr)

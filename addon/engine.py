@@ -211,13 +211,21 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
         self._stop_an_animation_left_without_a_frame(depsgraph)
 
     def _stop_an_animation_left_without_a_frame(self, depsgraph):
-        """A frame of an animation cancelled (request_cancel: a script's or a signal's, which
-        Blender's test_break does not know) before its result was begun is reported as an error,
-        which stops the animation: Blender 5.0.1 would write the frame anyway, and its writer
-        crashes on a render without an image (a segfault in do_write_image_or_movie, PNG or EXR)."""
-        if self.is_animation and not self._result_begun and self.cancel_requested() and not self.test_break():
-            self.report({'ERROR'}, f"DACRT: render cancelled at frame {depsgraph.scene.frame_current} of the "
-                                   "animation, before it had an image: the animation stops here")
+        """A frame cancelled by request_cancel (the command line's Ctrl-C, a script's or a signal
+        handler's cancel, which Blender's test_break does not know) before any of its results was
+        begun is reported as an error, which stops the render: Blender 5.0.1 would write the
+        frame anyway (every frame of an animation; a still with write_still), and its writer
+        crashes on a render without an image (a segfault in do_write_image_or_movie or
+        BKE_image_render_write; PNGs of unrendered frames were written). An animation stops at
+        such a frame whatever its other layers did (one empty layer is enough)."""
+        if self._result_begun or not _CANCEL_ASKED[0] or self.test_break():
+            return          # (Esc: Blender's break flag is set, and it writes nothing)
+        frame = depsgraph.scene.frame_current
+        if self.is_animation:
+            self.report({'ERROR'}, f"DACRT: render cancelled at frame {frame} of the animation, before it had "
+                                   "an image: the animation stops here")
+        elif len(self._layers_done) <= 1:   # (no other layer of this frame rendered: nothing to keep)
+            self.report({'ERROR'}, f"DACRT: render cancelled before frame {frame} had an image: nothing to write")
 
     # --- the viewport (3D viewport in Rendered shading) ---------------------------------
     def view_update(self, context, depsgraph):
