@@ -84,6 +84,7 @@ def factor_images(frame, reading):
         return Texture((img.as_pointer(), unassociate, interp, ext), pixels, interp, ext, transform, None, img.name)
     return image
 
+
 # the latest blended maps (a world with Light Path blends up to three per export: the lighting,
 # the camera's and the bounces' worlds), each with what it was made from (_made): a list of
 # {'made': ..., 'env': Environment}, the newest last
@@ -155,6 +156,7 @@ def _made(parts, values):
 
 
 def _same_made(a, b) -> bool:
+    """Whether two _made records name the same blended map."""
     if (a[0] is None) != (b[0] is None) or (a[0] is not None and not same_bits(a[0], b[0])):
         return False
     for x, y in zip(a[1:], b[1:]):
