@@ -69,10 +69,15 @@ def _clamped_weight(c):
     return c
 
 
-# (a BSDF whose NaN evaluation spoils the point under a Mix factor nodes compute, a Light Path's
-# or a texture's: Cycles allocates no closure where its weight is 0, so the rest is kept there)
+# (a BSDF whose NaN evaluation spoils the point under a Mix factor or a colour nodes compute, a
+# Light Path's or a texture's: Cycles allocates no closure where its weight is 0, so the rest is
+# kept there)
 NAN_SPOILS_WHERE_WEIGHED = ("Cycles blackens the material's other BSDFs and transparency too where it has "
-                            "weight, which a Mix factor nodes compute leaves lit here")
+                            "weight, which a Mix factor or colour nodes compute leaves lit here")
+# Cycles' CLOSURE_WEIGHT_CUTOFF: a BSDF of |average(colour x Mix weights)| below it gets no closure
+# (bsdf_alloc), so a NaN-bent one spoils nothing (measured, a rough Glossy Mixed half and half
+# with a Diffuse: grey colour 9e-6 keeps the Diffuse, 2e-5 blackens it)
+CLOSURE_WEIGHT_CUTOFF = float(np.float32(1e-5))      # (its float32: a colour 2e-5 Mixed 0.5 is at it, allocated)
 
 
 def weighed_alike(node, depth=0):
@@ -90,6 +95,23 @@ def weighed_alike(node, depth=0):
         if to.type not in ('MIX_SHADER', 'ADD_SHADER', 'REROUTE') or not weighed_alike(to, depth + 1):
             return False
     return True
+
+
+def mixed_weight(node, depth=0):
+    """The weight the Mix Shaders of unlinked factor (weighed_alike) give a shader node's closure,
+    summed over its ways to the Material Output."""
+    total = 0.0
+    for link in (link for link in node.outputs[0].links if not link.is_muted):
+        to = link.to_node
+        if to.type == 'OUTPUT_MATERIAL':
+            total += 1.0
+        elif depth <= 64:
+            w = 1.0
+            if to.type == 'MIX_SHADER':
+                fac = min(max(float(to.inputs['Fac'].default_value), 0.0), 1.0)
+                w = fac if link.to_socket == to.inputs[2] else 1.0 - fac
+            total += w * mixed_weight(to, depth + 1)
+    return total
 
 
 class ShaderClosures:
@@ -114,12 +136,18 @@ class ShaderClosures:
         its NaN evaluation spoils the point's (self._nan_spoiled), or a sharp Glass's reflection
         at normal incidence. (A BSDF bent so had been lit unbent: a plane 0.40 where Cycles is 0.)"""
         what = f"{node.bl_label} '{node.name}' bent by Bump '{bump}' of NaN Distance"
+        if effect == 'all' and node.type in ('BSDF_GLOSSY', 'BSDF_GLASS'):
+            color, c_ok = constant_color(node.inputs['Color'])
+            if not c_ok:
+                effect = 'where'        # (black where its colour is, as under a computed Mix factor)
+            elif weighed_alike(node) and abs(np.mean(color[:3]) * mixed_weight(node)) < CLOSURE_WEIGHT_CUTOFF:
+                return Closure()        # no closure in Cycles: nothing NaN, nothing spoiled
         if effect == 'all' and weighed_alike(node):
             self._nan_spoiled.append(what)
             return self._nan_kept(node, reasons)
-        if effect in ('own', 'all'):
+        if effect in ('own', 'all', 'where'):
             reasons.append(f"{what} renders black, as in Cycles (its bumped normal NaN)" +
-                           (f"; {NAN_SPOILS_WHERE_WEIGHED}" if effect == 'all' else ""))
+                           (f"; {NAN_SPOILS_WHERE_WEIGHED}" if effect != 'own' else ""))
             return self._nan_kept(node, reasons)
         if node.type == 'BSDF_PRINCIPLED':
             reasons.append(f"{what} renders black; Cycles keeps its sharp reflection at normal incidence of "
