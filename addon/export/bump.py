@@ -106,11 +106,11 @@ def nan_bump_effect(bsdf):
     return 'sharp' if None not in sharp else 'own'
 
 
-def nan_bump_all_blackened(bump, depth=0):
+def nan_bump_all_rendered(bump, depth=0):
     """Whether the Bump bends (bends) and every BSDF its Normal output bends (directly or through
-    other Bumps' Normal) is one whose NaN bend nan_bump_effect renders and says: its NaN then
-    needs no other word. (A Bump that does not bend is passed over, so nothing is
-    blackened: its NaN is said.)"""
+    other Bumps' Normal) is one whose NaN bend nan_bump_effect renders and says (black, a sharp
+    Glass's F0 x colour, a sharp Glossy unbent): its NaN then needs no other word. (A Bump that
+    does not bend is passed over, so nothing is rendered so: its NaN is said.)"""
     links = [link for link in bump.outputs['Normal'].links if not link.is_muted]
     if not links or depth > 64 or not bends(bump):
         return False
@@ -118,7 +118,7 @@ def nan_bump_all_blackened(bump, depth=0):
         to = link.to_node
         if link.to_socket.identifier != 'Normal':
             return False
-        if not (nan_bump_effect(to) is not None or (to.type == 'BUMP' and nan_bump_all_blackened(to, depth + 1))):
+        if not (nan_bump_effect(to) is not None or (to.type == 'BUMP' and nan_bump_all_rendered(to, depth + 1))):
             return False
     return True
 

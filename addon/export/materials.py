@@ -27,7 +27,7 @@ from ..nodegraph import (closure_link, compiled, cycle_said, dead_group_outputs,
 from ..procedural import ProceduralTexels
 from .aovs import shader_aovs
 from .attributemaps import AttributeMaps, affine_fit, marked_label, probe_albedo
-from .bump import displacement_bump, nan_bump_all_blackened
+from .bump import displacement_bump, nan_bump_all_rendered
 from .closure import Closure
 from .reflectors import (ROUGH_DIFFUSE_AVERAGED, ROUGH_DIFFUSE_WHY, glossy_kinds, has_glossy_closure,
                          rendered_closures)
@@ -67,10 +67,11 @@ NAN_NOT_ZERO_IN_CYCLES = {'BSDF_HAIR_PRINCIPLED': (('Radial Roughness', 'Offset'
 # ... of those, where the node's NaN is read at all: a Bump's only with its Height linked (Cycles
 # drops a Bump of constant Height; measured, a Wave Texture's Fac as Height under a sun: Cycles
 # black, DACRT a flat 0.64, said "read as 0 (as Cycles clamps it)"; a constant Height: both 0.64)
-# (and not where every BSDF it bends is one rendered black as Cycles renders it, which
-# shaders.py says: what is left, a Glass's or Sheen's, Cycles renders otherwise, not black)
+# (and not where every BSDF it bends is rendered as Cycles renders it under a NaN normal, which
+# shaders.py says: black, a sharp Glass's F0 x colour, a sharp Glossy unbent; what is left, a
+# microfiber Sheen, a roughness nodes compute, Cycles renders otherwise)
 _NAN_READ_WHEN = {'BUMP': lambda node: source(node.inputs['Height'])[0] is not None
-                   and not nan_bump_all_blackened(node)}
+                   and not nan_bump_all_rendered(node)}
 NAN_COMPUTED = {'LAYER_WEIGHT': ('Blend',)}
 # Inputs at float32's largest magnitude (Blender stores an 'inf' typed as 3.4e38) that Cycles
 # computes in float32 into what DACRT does not reproduce (measured, Cycles 5.0.1, each input
@@ -485,7 +486,7 @@ class MaterialBuilder(ShaderClosures, TexturedMixes, Cutouts, Emission, TexelBak
             found = nan_found(ntree, used, grouped)
             # (a Bump's NaN Distance bending only BSDFs shaders.py renders and says as Cycles
             # renders them: said there, not as read as 0, which it had been)
-            bent = _nan_inputs_named(ntree, {'BUMP': ('Distance',)}, lambda n: rendered(n) and nan_bump_all_blackened(n))
+            bent = _nan_inputs_named(ntree, {'BUMP': ('Distance',)}, lambda n: rendered(n) and nan_bump_all_rendered(n))
             said_apart = set(apart) | set(through) | set(bent)
             for bad, said in (([b for node, b, _, c in found
                                 if not c and node.type not in PROCEDURAL_TYPES and b not in said_apart],

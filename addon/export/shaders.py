@@ -134,7 +134,9 @@ class ShaderClosures:
         """The closure of a BSDF bent by a Bump of NaN Distance (its normal NaN in Cycles), as
         Cycles renders it (bump.nan_bump_effect): black, with the material's other BSDFs where
         its NaN evaluation spoils the point's (self._nan_spoiled), or a sharp Glass's reflection
-        at normal incidence. (A BSDF bent so had been lit unbent: a plane 0.40 where Cycles is 0.)"""
+        at normal incidence; nothing of a rough Glossy or Glass of no closure in Cycles (weight
+        below CLOSURE_WEIGHT_CUTOFF), only itself black where nodes compute its colour. (A BSDF
+        bent so had been lit unbent: a plane 0.40 where Cycles is 0.)"""
         what = f"{node.bl_label} '{node.name}' bent by Bump '{bump}' of NaN Distance"
         if effect == 'all' and node.type in ('BSDF_GLOSSY', 'BSDF_GLASS'):
             color, c_ok = constant_color(node.inputs['Color'])
