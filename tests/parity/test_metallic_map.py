@@ -52,9 +52,10 @@ def _region_means(img, metal):
 
 
 def _sphere_means(kind, base_texture, said):
-    """{engine: {region: mean RGB}} (_region_means) of a sphere whose Principled (base (0.6, 0.3,
-    0.2) or a Checker of it and (0.2, 0.5, 0.7); roughness 0.4, the default specular layer) has
-    its Metallic from `kind`'s map; said keeps DACRT's reports."""
+    """{engine: {region: mean RGB}} (_region_means, and 'sphere': the whole sphere's mean) of a
+    sphere whose Principled (base (0.6, 0.3, 0.2) or a Checker of it and (0.2, 0.5, 0.7);
+    roughness 0.4, the default specular layer) has its Metallic from `kind`'s map; said keeps
+    DACRT's reports."""
     bpy.ops.wm.read_homefile(use_empty=True, use_factory_startup=True)
     sc = bpy.context.scene
     sc.render.resolution_x = sc.render.resolution_y = 32
@@ -89,7 +90,14 @@ def _sphere_means(kind, base_texture, said):
     nt.links.new(glow.outputs[0], out.inputs['Surface'])
     sc.render.engine = 'CYCLES'
     metal = scenes.render_rgba(sc)
-    return {engine: _region_means(img, metal) for engine, img in images.items()}
+    return {engine: {**_region_means(img, metal), 'sphere': _sphere_mean(img)} for engine, img in images.items()}
+
+
+def _sphere_mean(img):
+    """The whole sphere's mean RGB, premultiplied: the rim's pixels weigh by their coverage, so
+    every view angle counts."""
+    img = img.reshape(-1, 4).astype(np.float64)
+    return img[:, :3].sum(axis=0) / img[:, 3].sum()
 
 
 @pytest.mark.parametrize("kind,base_texture", [('checker', False), ('image', False), ('checker', True)])
@@ -100,5 +108,8 @@ def test_a_metallic_map_weighs_the_metal_per_point_as_cycles(kind, base_texture,
     for region in ('metal', 'dielectric'):
         ratio = means['DACRT'][region] / means['CYCLES'][region]
         np.testing.assert_allclose(ratio, 1.0, atol=0.015, err_msg=f"{region}: {means}")
+    # (and the whole sphere's mean, a tighter bound on the mean the sides weigh together)
+    ratio = means['DACRT']['sphere'] / means['CYCLES']['sphere']
+    np.testing.assert_allclose(ratio, 1.0, atol=0.01, err_msg=f"sphere: {means}")
     assert not [t for t in said if "Metallic driven by nodes" in t], said
     assert [t for t in said if "Metallic from" in t and "per point" in t], said
