@@ -74,9 +74,9 @@ def _clamped_weight(c):
 # kept there)
 NAN_SPOILS_WHERE_WEIGHED = ("Cycles blackens the material's other BSDFs and transparency too where it has "
                             "weight, which a Mix factor or colour nodes compute leaves lit here")
-# Cycles' CLOSURE_WEIGHT_CUTOFF: a BSDF of |average(colour x Mix weights)| below it gets no closure
+# Cycles' CLOSURE_WEIGHT_CUTOFF: a BSDF of |average(its weight)| below it gets no closure
 # (bsdf_alloc), so a NaN-bent one spoils nothing (measured, a rough Glossy Mixed half and half
-# with a Diffuse: grey colour 9e-6 keeps the Diffuse, 2e-5 blackens it)
+# with a Diffuse: grey colour 9e-6 keeps the Diffuse, 2e-5 blackens it; _no_closure)
 CLOSURE_WEIGHT_CUTOFF = float(np.float32(1e-5))      # (its float32: a colour 2e-5 Mixed 0.5 is at it, allocated)
 
 
@@ -114,6 +114,18 @@ def mixed_weight(node, depth=0):
     return total
 
 
+def _no_closure(color, weight, glass):
+    """Whether Cycles allocates no closure for a Glossy or Glass BSDF of constant colour under
+    Mix weight `weight`: a Glossy's weight is its colour x the Mix weight, a Glass's the Mix weight
+    alone (its colour a Fresnel tint; measured, grey 1e-10 Mixed 0.5 blackens the Diffuse beside
+    it), but a Glass of black colour is none (measured: the Diffuse kept, and where a Checker's
+    colour is black)."""
+    rgb = np.asarray(color[:3], np.float64)
+    if glass:
+        return not rgb.any() or weight < CLOSURE_WEIGHT_CUTOFF
+    return abs(rgb.mean() * weight) < CLOSURE_WEIGHT_CUTOFF
+
+
 class ShaderClosures:
     """A mixin of materials.MaterialBuilder (see the module docstring): its methods read and
     set the builder's state."""
@@ -134,15 +146,16 @@ class ShaderClosures:
         """The closure of a BSDF bent by a Bump of NaN Distance (its normal NaN in Cycles), as
         Cycles renders it (bump.nan_bump_effect): black, with the material's other BSDFs where
         its NaN evaluation spoils the point's (self._nan_spoiled), or a sharp Glass's reflection
-        at normal incidence; nothing of a rough Glossy or Glass of no closure in Cycles (weight
-        below CLOSURE_WEIGHT_CUTOFF), only itself black where nodes compute its colour. (A BSDF
+        at normal incidence; nothing of a rough Glossy or Glass of no closure in Cycles
+        (_no_closure), only itself black where nodes compute its colour. (A BSDF
         bent so had been lit unbent: a plane 0.40 where Cycles is 0.)"""
         what = f"{node.bl_label} '{node.name}' bent by Bump '{bump}' of NaN Distance"
         if effect == 'all' and node.type in ('BSDF_GLOSSY', 'BSDF_GLASS'):
             color, c_ok = constant_color(node.inputs['Color'])
+            glass = node.type == 'BSDF_GLASS'
             if not c_ok:
                 effect = 'where'        # (black where its colour is, as under a computed Mix factor)
-            elif weighed_alike(node) and abs(np.mean(color[:3]) * mixed_weight(node)) < CLOSURE_WEIGHT_CUTOFF:
+            elif weighed_alike(node) and _no_closure(color, mixed_weight(node), glass):
                 return Closure()        # no closure in Cycles: nothing NaN, nothing spoiled
         if effect == 'all' and weighed_alike(node):
             self._nan_spoiled.append(what)

@@ -118,6 +118,10 @@ UNLIKE = "otherwise (its bumped normal NaN)"
     ('glossy', 0.5, 'diffuse', 0.0, None),
     ('glossy', 0.5, 'diffuse', 9e-6, None),
     ('glossy', 0.5, 'diffuse', 2e-5, SPOILS),    # 1e-5, at the cutoff: allocated, black
+    # a Glass's closure weighs the Mix weight alone (its colour a Fresnel tint), but none is made
+    # of a black one
+    ('glass', 0.5, 'diffuse', 0.0, None),
+    ('glass', 0.5, 'diffuse', 1e-10, SPOILS),
 ])
 def test_a_nan_bumped_bsdf_renders_as_in_cycles(kind, roughness, beside, color, wording, said):
     means = _sphere_mean(kind, roughness, beside, color)
@@ -134,13 +138,14 @@ def test_a_nan_bumped_bsdf_renders_as_in_cycles(kind, roughness, beside, color, 
         assert "'Distance' of 'Bump'" not in text, said
 
 
-def test_a_nan_bumped_glossy_of_a_colour_map_black_in_places_is_said(said):
-    """A rough Glossy whose colour is a Checker's of black and white texels, Mixed with an unbent
-    Diffuse: Cycles keeps the Diffuse where the Glossy's colour is black (0.149, 0.212, 0.149
-    against 0.128 for the background alone). DACRT blackens the Glossy alone and keeps the Diffuse
-    everywhere (0.166, 0.277, 0.166), as under a Mix factor nodes compute, and says it; it had
-    blackened the whole sphere (0.128)."""
-    means = _sphere_mean('glossy', 0.5, 'diffuse', 'checker')
+@pytest.mark.parametrize("kind", ['glossy', 'glass'])
+def test_a_nan_bumped_bsdf_of_a_colour_map_black_in_places_is_said(kind, said):
+    """A rough Glossy or Glass whose colour is a Checker's of black and white texels, Mixed with
+    an unbent Diffuse: Cycles keeps the Diffuse where the colour is black (0.149, 0.212, 0.149
+    against 0.128 for the background alone). DACRT blackens the bent BSDF alone and keeps the
+    Diffuse everywhere (0.166, 0.277, 0.166), as under a Mix factor nodes compute, and says it;
+    it had blackened the whole sphere (0.128)."""
+    means = _sphere_mean(kind, 0.5, 'diffuse', 'checker')
     assert np.all(means['DACRT'] >= means['CYCLES'] - 4e-3), means
     assert means['CYCLES'][1] > 0.2 and means['DACRT'][1] > 0.2, means     # the Diffuse kept in part
     assert "which a Mix factor or colour nodes compute leaves lit here" in " ".join(said), said
