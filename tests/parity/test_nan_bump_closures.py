@@ -113,10 +113,10 @@ UNLIKE = "otherwise (its bumped normal NaN)"
     ('velvet', None, None, None, "renders black, as in Cycles (its bumped normal NaN)"),
     ('glossy', 0.0, None, None, UNLIKE),    # sharp: as unbent (0.4 over the sphere), DACRT had made it black
     # Cycles allocates no closure of |average(colour x Mix weight)| below 1e-5: a black Glossy, or
-    # one of grey 9e-6 Mixed 0.5, spoils nothing, the Diffuse kept (0.166, 0.277, 0.166); DACRT
+    # one of grey 1.5e-5 Mixed 0.5, spoils nothing, the Diffuse kept (0.166, 0.277, 0.166); DACRT
     # had blackened the whole sphere (0.128, the background)
     ('glossy', 0.5, 'diffuse', 0.0, None),
-    ('glossy', 0.5, 'diffuse', 9e-6, None),
+    ('glossy', 0.5, 'diffuse', 1.5e-5, None),     # above the cutoff alone, below it x 0.5
     ('glossy', 0.5, 'diffuse', 2e-5, SPOILS),    # 1e-5, at the cutoff: allocated, black
     # a Glass's closure weighs the Mix weight alone (its colour a Fresnel tint), but none is made
     # of a black one
