@@ -530,20 +530,27 @@ def test_lights_seen_by_camera():
 def test_light_without_diffuse_visibility_lights_nothing():
     """Cycles excludes a light whose diffuse ray visibility is off from diffuse surfaces (light
     sampling and BSDF hits): only camera rays may still see it. It keeps its share of the light
-    choice (lights/choiceonly.py), so beside a sun the sun is chosen less often: the same mean,
-    no longer exact per sample."""
+    choice (lights/choiceonly.py), so beside a sun the sun is chosen less often: each sample
+    is nothing or the sun's light over its probability."""
     kw = dict(size_x=1.0, visible_diffuse=False)
     integ = lit([light('AREA', 100.0, translation(z=1.0), visible_camera=True, **kw)], samples=16)
     assert integ.film.combined()[..., 0].max() == 0.0
     assert integ.stats['rays']['shadow'] == 0
     seen = looking_up(light('AREA', 100.0, translation(z=1.0), visible_camera=True, **kw))
     assert seen.film.combined()[..., 0] == pytest.approx(100.0 / np.pi, rel=1e-5)
-    # with a light the diffuse rays do see, only that one lights the plane (unbiased: 64 spp
-    # over 64 pixels, each sample the sun's light over its probability or nothing)
+    # with a light the diffuse rays do see, only that one lights the plane: the choice is
+    # reweighed by what each lamp gives the view, and the stand-in gives nothing, so the sun
+    # keeps all but the uniform part (0.8 + 0.2 / 2); each of a pixel's 64 samples is the sun's
+    # light over that probability or nothing, so a pixel is a whole number of 1/64 of it, and
+    # the (stratified) picks give the sun its probability's share of them
     both = lit([light('AREA', 100.0, translation(z=1.0), visible_camera=True, **kw),
                 light('SUN', 3.0, np.eye(4))], samples=64)
     assert both.lights.num_entries == 2 and len(both.lights.hidden_lamps) == 1
-    assert both.film.combined()[..., 0].mean() == pytest.approx(RHO * 3.0 / np.pi, rel=0.03)
+    p = 0.8 + 0.2 / 2
+    assert both.lights.lamp_prob[0] == pytest.approx(p, rel=1e-6)
+    picks = both.film.combined()[..., 0] * 64 * p / (RHO * 3.0 / np.pi)
+    np.testing.assert_allclose(picks, np.round(picks), atol=1e-3)
+    assert np.abs(picks / 64 - p).max() <= 1.0 / 64
     unseen = lit([light('AREA', 100.0, translation(z=1.0), name='Ghost', visible_camera=False, **kw)], samples=4)
     assert unseen.film.combined()[..., 0].max() == 0.0
     assert any('Ghost' in text for _, text in unseen.messages)
