@@ -346,33 +346,49 @@ class LightSetup:
 
     def _say_split_occluders(self, sd: SceneData):
         """Objects that light samples and bounce rays see differently (hidden from diffuse rays
-        but casting shadows, or the reverse) beside lamps hidden from diffuse rays that DACRT's
-        light tree does not hold (suns, or every lamp with Light Tree off). Behind such an object
-        a light's samples and the bounce rays toward it disagree (shadowed or not), and MIS weighs
-        the two by how likely the light is chosen. Both engines keep the hidden lamps in their
-        choice (lights/choiceonly.py: fuzz seed 306, 0.97x Cycles while DACRT left them out, now
-        matched, tests/parity/test_split_occluders.py); the tree weighs them as Cycles' does, but
-        outside it DACRT's reweighting gives a lamp that lights nothing only the uniform part of
-        its share, where Cycles gives it its power's: a hidden sun beside the split box, Cycles
-        0.44% brighter than without it, DACRT unchanged (0.996x); Light Tree off, 0.997x."""
+        but casting shadows, or the reverse) beside lamps hidden from diffuse rays whose share of
+        the light choice is DACRT's, not Cycles'. Behind such an object a light's samples and the
+        bounce rays toward it disagree (shadowed or not), and MIS weighs the two by how likely
+        the light is chosen. Both engines keep the hidden lamps in their choice
+        (lights/choiceonly.py: fuzz seed 306, 0.97x Cycles while DACRT left them out, now
+        matched, tests/parity/test_split_occluders.py); among lamps the light tree weighs them
+        as Cycles' does, by their power. But DACRT's reweighting (LightSet.reweight) splits the
+        choice between the suns, the tree and the world by what each gives the view, so a
+        lamp that lights nothing gets only the uniform part of its group's share, where Cycles
+        gives it its power's: a hidden sun beside the split box, Cycles 0.44% brighter than
+        without it, DACRT unchanged (0.996x); Light Tree off, 0.997x. Hidden lamps of the tree's
+        kind beside a sun BSDF rays meet, or beside a light-sampled world: the sun keeps 0.9 of
+        DACRT's choice whatever their power or number (one hidden point lamp is no tree but a
+        group of its own, with the same share), while Cycles' share moves with them: a 1.5 rad
+        sun over the split box, 0.986x Cycles' mean beside one hidden 5000 W point lamp (z -42),
+        0.997x beside two (z -9; 100x their power, the same), 1.0000x with none. Said for one
+        or many alike."""
         lights = self.lights
         if not lights.hidden_lamps or lights.num_entries < 2 or not len(self.tri):
             return
-        first = lights.num_lamps - len(lights.hidden_lamps)     # (the stand-ins close the lamps)
-        apart = [l.name for i, l in enumerate(lights.hidden_lamps, first) if not lights.tree_member[i]]
-        if not apart:
+        tree_on = bool(getattr(self.settings, 'use_light_tree', True))
+        # (a lamp's bounds: its place in a tree; None for suns, which no tree holds)
+        apart = [l.name for l in lights.hidden_lamps if not tree_on or l.bounds() is None]
+        visible = lights.lamps[:lights.num_lamps - len(lights.hidden_lamps)]   # (the stand-ins close the lamps)
+        beside = lights.environment is not None or any(l.seen_by_bsdf and l.bounds() is None for l in visible)
+        treed = [l.name for l in lights.hidden_lamps if beside and tree_on and l.bounds() is not None]
+        if not (apart or treed):
             return
         vis = self.tri.visibility
         split = (((vis & VIS_DIFFUSE) != 0) != ((vis & VIS_SHADOW) != 0)) & (self.tri.area > 0)
         if not split.any():
             return
+        def names(ns):
+            return ', '.join(repr(n) for n in dict.fromkeys(ns))
+        which = ([f"outside the light tree (suns, or all with Light Tree off: {names(apart)})"] if apart else []) + \
+                ([f"of the light tree's kind beside a sun or the world (the tree's share against them "
+                  f"is DACRT's: {names(treed)})"] if treed else [])
         self.messages.append(('WARNING', f"object(s) {sd.named_objects(split)} hidden from diffuse rays but not from "
                                          "shadows (or the reverse): behind them light samples and bounce rays "
                                          "disagree, weighed by how likely each light is chosen, and light(s) "
-                                         "hidden from diffuse rays outside the light tree (suns, or all with "
-                                         f"Light Tree off: {', '.join(repr(n) for n in dict.fromkeys(apart))}) "
-                                         "take a share of that choice that is DACRT's, not Cycles', so the light "
-                                         "near those objects differs (about 0.5%)"))
+                                         f"hidden from diffuse rays {', and '.join(which)} take a share of that "
+                                         "choice that is DACRT's, not Cycles', so the light near those objects "
+                                         "differs (about 1%)"))
 
     def _say_shadowless_lamps(self):
         """Lamps with Cast Shadow off that BSDF rays meet (MIS on, a radius, size or angle):
