@@ -5,10 +5,12 @@ takes its share of that choice in Cycles: fuzz seed 306 (a 413 W diffuse-hidden 
 beside a diffuse-hidden half cylinder), Cycles 3.5% brighter, one 4x4 block 4-6x DACRT's, while
 DACRT left the lamp out of its choice (said from session 76 on). DACRT keeps it too now
 (lights/choiceonly.py; tests/parity/test_split_occluders.py renders those cases against
-Cycles), and its light tree weighs it as Cycles' does, so beside such a lamp in the tree nothing
-is said any more. Outside the tree (a hidden sun, or Light Tree off) DACRT's share for it is its
-own: said, naming the object and the lamp; not where the image cannot change (no hidden lamp, or
-one of zero strength, or the object hidden from shadow rays too).
+Cycles), and its light tree weighs it among lamps as Cycles' does, so beside such a lamp in the
+tree and lamps only nothing is said any more. Outside the tree (a hidden sun, or Light Tree off),
+or in it beside a sun BSDF rays meet or a light-sampled world (the tree's share against those is
+DACRT's reweighting: a 1.5 rad sun, 0.986x Cycles' mean beside one hidden lamp, 0.997x beside
+two), DACRT's share for it is its own: said, naming the object and the lamp; not where the image
+cannot change (no hidden lamp, or one of zero strength, or the object hidden from shadow rays too).
 
 DACRT's messages at 1 sample, 32x24."""
 import numpy as np
