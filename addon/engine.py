@@ -17,6 +17,7 @@ from . import cryptomatte, export
 from .display import Display
 from .allocator import heap_in_use, render_heap, rss_peak, rss_peak_reset
 from .blasthreads import blas_on_caller
+from .export import worldkeep
 from .passes import (AOV_CHANNELS, DENOISE, LIGHTGROUP_PREFIX, NOISY_IMAGE, PASSES, enabled, result_name,
                      result_passes, writes_noisy_image)
 from .texture import stored_texels
@@ -83,11 +84,13 @@ def stats_key(scene_name, layer):
 def register_handlers():
     if _new_frame not in bpy.app.handlers.render_pre:
         bpy.app.handlers.render_pre.append(_new_frame)
+    worldkeep.register_handlers()
 
 
 def unregister_handlers():
     while _new_frame in bpy.app.handlers.render_pre:
         bpy.app.handlers.render_pre.remove(_new_frame)
+    worldkeep.unregister_handlers()
 
 
 # A cancel asked from outside Blender's interface, for the render in progress: the command

@@ -26,7 +26,7 @@ from .images import MISSING_IMAGE, WHOLE, encoded_environment, image_pixels
 from .materials import channel_line
 from .shadersockets import mix_factor, value_emission
 from .sky import sky_environment
-from . import worldmix
+from . import worldkeep, worldmix
 
 
 LINEAR_INTERPOLATIONS = ('Cubic', 'Smart')     # of environment maps: blended linearly (reported)
@@ -224,7 +224,7 @@ def _world_surface(socket, weight, color, reasons, depth, rays=None, by_ray=(), 
                               for i, w in enumerate(weights))
         if ea is not None and eb is not None:
             # (the second had been ignored, said)
-            env = worldmix.kept_map([(ua, ea), (ub, eb)], _equirect_directions, PROCEDURAL_WIDTH)
+            env = worldkeep.kept_map([(ua, ea), (ub, eb)], _equirect_directions, PROCEDURAL_WIDTH)
             reasons.append(f"two environment maps in the world summed into a {_map_said(env)}")
             return none, env
         return ua + ub, ea if ea is not None else eb
@@ -349,7 +349,7 @@ def _factor_mix(node, weight, color, reasons, depth, rays, by_ray, frame, readin
     shaders that are not both Backgrounds of procedural colours (an Environment or Sky Texture,
     a Light Path mix, another Mix or Add): each side exported as the world is (_world_surface,
     for the same rays), the two blended per direction into one map, (1 - f) A + f B
-    (worldmix.blended_map, kept for the next export: worldmix.kept_map); None where the factor
+    (worldmix.blended_map, kept for the next export: worldkeep.kept_map); None where the factor
     reads anything else. Its factor had stood at its own value 0.5, said (fuzz 200, 208, 215,
     221, 223, 227, 241, 246, 250: 0.71-1.31x Cycles per channel)."""
     notes = []
@@ -362,7 +362,7 @@ def _factor_mix(node, weight, color, reasons, depth, rays, by_ray, frame, readin
     reasons.extend(notes)
     if all(env is None for _, env in sides) and np.array_equal(sides[0][0], sides[1][0]):
         return sides[0]         # ((1 - f) A + f A: the factor changes nothing)
-    env = worldmix.kept_map(sides, _equirect_directions, PROCEDURAL_WIDTH, factor)
+    env = worldkeep.kept_map(sides, _equirect_directions, PROCEDURAL_WIDTH, factor)
     reasons.append(f"world Mix Shader factor from {source} baked into a {_map_said(env)}")
     return np.zeros(3, np.float32), env
 

@@ -4,19 +4,12 @@ equirectangular map that the environment light blends and samples: a world Mix S
 varies over the view direction ((1 - f) A + f B per direction), and an Add Shader of two maps (their
 sum); and the images such a factor reads (factor_images). Part of the export layer.
 
-A blended map is kept for the next export of the same world (kept_map): at an HDRI's width it
-costs seconds of CPU (~5.8 s a 4096 x 2048 image beside a colour), every frame of an animation
-and every viewport update, where nothing of it changed."""
-
-import itertools
-from dataclasses import replace
-import threading
+A blended map is kept for the next export of the same world: export/worldkeep.py."""
 
 import numpy as np
 
 from .. import nodeeval
 from .. import scenedata as sd
-from ..lights.envkeep import read_only, same_bits
 from ..lights.environment import EnvironmentLight
 from ..mapping import texture_transform
 from .closure import Texture
@@ -83,101 +76,3 @@ def factor_images(frame, reading):
         transform = texture_transform(node, reasons) if per_point is None else None
         return Texture((img.as_pointer(), unassociate, interp, ext), pixels, interp, ext, transform, None, img.name)
     return image
-
-
-# the latest blended maps (a world with Light Path blends up to three per export: the lighting,
-# the camera's and the bounces' worlds), each with what it was made from (_made): a list of
-# {'made': ..., 'env': Environment}, the newest last
-_kept: list = []
-_KEPT = 3
-_serial = itertools.count()
-_lock = threading.Lock()
-
-
-def kept_map(parts, directions_of, width, factor=None):
-    """blended_map(parts, directions_of, width, factor), the very Environment an earlier call
-    made where that call's parts and factor values are the same: each part's uniform colour,
-    strength, rotation and interpolation equal, and its texels either named by the same
-    texels_key (a Sky Texture's map) or the same bits (an Environment Texture's image: the same
-    read-only array, or a new array holding the old one's bits); the factor compared by its
-    values at every texel centre of the map (computed anyway, a small part of the blend: a
-    Gradient's 0.07 s of 5.8 s at 4096 x 2048), so no change of the nodes behind it can be missed.
-    The map is made read-only and given a texels_key of its own, so the environment light's
-    native map of it is kept too (lights/envkeep.py). A part whose texels are computed on read
-    (texture.LazyTexels) is not compared: built each time."""
-    maps = [env for _, env in parts if env is not None]
-    width = max([int(width)] + [int(np.shape(env.pixels)[1]) for env in maps])
-    dirs = directions_of(width)
-    values = None
-    if factor is not None:
-        flat = dirs.reshape(-1, 3)
-        band = max(1, (1 << 18) // width) * width
-        values = np.concatenate([np.asarray(factor(np.ascontiguousarray(flat[i:i + band], np.float32)),
-                                            np.float32).reshape(-1, 1) for i in range(0, len(flat), band)])
-    made = _made(parts, values)
-    with _lock:
-        for i, entry in enumerate(_kept):
-            if made is not None and _same_made(entry['made'], made):
-                _kept.append(_kept.pop(i))          # (the newest last)
-                return entry['env']
-    offset = [0]
-
-    def kept_factor(d):
-        # (blended_map asks band by band, in order: the values computed above, once)
-        f = values[offset[0]:offset[0] + len(d)]
-        offset[0] += len(d)
-        return f
-    env = blended_map(parts, lambda w: dirs, width, None if values is None else kept_factor)
-    if made is None:
-        return env
-    env.pixels.setflags(write=False)
-    env = replace(env, texels_key=('worldmix', next(_serial)))
-    with _lock:
-        _kept.append({'made': made, 'env': env})
-        del _kept[:-_KEPT]
-    return env
-
-
-def _made(parts, values):
-    """What a blended map is made from, for _same_made; None where a part's texels cannot be compared."""
-    made = [values]
-    for uniform, env in parts:
-        made.append(np.asarray(uniform, np.float32).tobytes())
-        if env is None:
-            made.append(None)
-            continue
-        texels = env.pixels if env.encoded is None else env.encoded
-        if env.texels_key is None and not isinstance(texels, np.ndarray):
-            return None
-        made.append((env.texels_key, None if env.texels_key is not None else (texels, read_only(texels)),
-                     np.asarray(env.strength, np.float32).tobytes(), np.asarray(env.to_map, np.float64).tobytes(),
-                     env.interpolation, env.encoded is None))
-    return made
-
-
-def _same_made(a, b) -> bool:
-    """Whether two _made records name the same blended map."""
-    if (a[0] is None) != (b[0] is None) or (a[0] is not None and not same_bits(a[0], b[0])):
-        return False
-    for x, y in zip(a[1:], b[1:]):
-        if x is None or y is None or not isinstance(x, tuple):
-            if x != y:
-                return False
-        elif x[0] != y[0] or x[2:] != y[2:] or (x[0] is None and not _same_texels(*x[1], y[1][0])):
-            return False
-    return len(a) == len(b)
-
-
-def _same_texels(kept, was_read_only, texels) -> bool:
-    """Whether texels hold the bits of the kept texels: the same array, read-only with all it
-    views then and now (a file's texels export.readkeep gives again), or another array of the
-    same bits (one written in place since would equal itself: not compared)."""
-    if texels is kept:
-        return was_read_only and read_only(texels)
-    return not np.may_share_memory(kept, texels) and same_bits(np.asarray(kept), np.asarray(texels))
-
-
-def forget():
-    """Drop the kept maps (tests; a session that wants the memory back)."""
-    with _lock:
-        _kept.clear()
