@@ -32,6 +32,75 @@ def lookup_settings(node, reasons):
     return interp, node.extension
 
 
+def image_texture(node, reasons, per_point, alpha_used, frame, reading, images):
+    """The closure.Texture of an Image Texture node (None: no image or unreadable), as a material
+    and a world's factor (worldmix.factor_images) read it: its image's pixels at `frame` through
+    `reading` (images.ImageReading), loaded once per export into `images` ({(image pointer,
+    unassociated, sequence frame): (pixels, what loading said)}, said again by each reader), its
+    mapping, interpolation and extension. alpha_used: whether Cycles reads its Alpha output (the
+    colour of an image stored associated is then unassociated). per_point (procedurals._image,
+    which computes the node's coordinates and projection itself): no transform, nothing said
+    about its coordinates."""
+    img = node.image
+    if per_point is None:
+        transform = texture_transform(node, reasons)
+        if node.projection != 'FLAT':
+            reasons.append(f"{node.projection.lower()} image projection as flat")
+    else:
+        transform = None
+    interp, ext = lookup_settings(node, reasons)
+    if img is None:
+        reasons.append("Image Texture without an image (magenta, as Cycles)")
+        return None
+    # Cycles: with the Alpha output used, the Color output of an image stored with
+    # associated alpha is unassociated, rgb / alpha (measured in Cycles 5.0); one whose Alpha is
+    # unused is when an identical node's is (Cycles merges the two: a leaf PNG's second node for
+    # its Alpha had left the first's colour associated, 0.86x)
+    unassociate = bool(alpha_used and associates_alpha(img))
+    key = img.as_pointer()
+    at = user_frame(img, node.image_user, frame)   # an image sequence's frames differ
+    cached = images.get((key, unassociate, at))
+    if cached is None:
+        # what loading it says is said again by every material that reads it (and by each
+        # rebuild of one: _build's probes and _product_map start with fresh reasons)
+        notes = []
+        pixels = image_pixels(img, notes, unassociate, node.image_user, frame, reading)
+        if pixels is not None and not all_finite(pixels):     # (an 8-bit image's bytes: finite)
+            # (a float image's NaN or infinity, kept: Cycles blends them in, and surfaces
+            # where the blend reaches them render black, as here)
+            ok = np.isfinite(pixels)
+            colour = ok[..., :3].any(axis=-1)       # (some colour channel finite: not black)
+            whole = int((~colour).sum())
+            partial = int((colour & ~ok.all(axis=-1)).sum())
+            if whole:
+                notes.append(f"image '{img.name}': {whole} texel(s) NaN or infinite, read as 0 by every lookup "
+                             "that blends them in (black there, as in Cycles)")
+            if partial:
+                # (measured in Cycles 5.0: a point blending one in loses its light samples, 0 under
+                # a sun, and keeps its BSDF-sampled light per channel, 0.75x under a uniform world)
+                notes.append(f"image '{img.name}': {partial} texel(s) with some channels or the alpha NaN "
+                             "or infinite: those channels read as 0 and the others kept here, while Cycles "
+                             "drops the light samples of points that blend them in (darker there in Cycles)")
+        if pixels is not None and img.source == 'TILED':
+            pixels = udim_tiles(img, pixels, notes, unassociate, reading)
+        cached = images[key, unassociate, at] = (pixels, notes)
+    pixels, notes = cached
+    reasons.extend(notes)
+    if pixels is None:
+        return None
+    udim = pixels if isinstance(pixels, UdimTiles) else None
+    if transform is not None and not np.isfinite(transform).all():
+        # a NaN or infinite Mapping (named in reasons): Cycles' lookup at NaN coordinates
+        # gives NaN in every channel, which its closures drop (a NaN colour is black, a NaN
+        # alpha opaque): the image is read as one black opaque texel
+        reasons.append(f"so image '{img.name}' reads black and opaque there (as in Cycles)")
+        pixels, udim = np.array([[[0.0, 0.0, 0.0, 1.0]]], np.float32), None
+        transform = np.array([[0.0, 0.0, 0.5], [0.0, 0.0, 0.5]])
+    where = None if transform is None else tuple(transform.ravel())
+    return Texture((key, unassociate, interp, ext, where, at), pixels if udim is None else udim.flat,
+                   interp, ext, transform, udim, img.name)
+
+
 class ImageTextures:
     """A mixin of materials.MaterialBuilder (see the module docstring): its methods read and
     set the builder's state."""
@@ -40,80 +109,22 @@ class ImageTextures:
     image_reading = WHOLE
 
     def _texture(self, node, reasons, per_point=None):
-        """The closure.Texture of an Image Texture node (None: no image or unreadable). per_point
-        (procedurals._image, which computes the node's coordinates and projection itself): no
-        transform, nothing said about its coordinates, and its UV map counted only when
-        per_point is 'uv' (it reads one)."""
-        img = node.image
-        if per_point is None:
-            transform = texture_transform(node, reasons)
+        """The closure.Texture of an Image Texture node (image_texture; None: no image or
+        unreadable), its UV map counted unless per_point (procedurals._image) is other than 'uv'.
+        While a chain is probed with an attribute (_image_probe), the probe's texels stand in."""
+        if per_point is None or per_point == 'uv':
             self._uv_names.append(uv_map_name(node))
-            if node.projection != 'FLAT':
-                reasons.append(f"{node.projection.lower()} image projection as flat")
-        else:
-            transform = None
-            if per_point == 'uv':
-                self._uv_names.append(uv_map_name(node))
-        interp, ext = lookup_settings(node, reasons)
-        if img is None:
-            reasons.append("Image Texture without an image (magenta, as Cycles)")
-            return None
-        # Cycles: with the Alpha output used, the Color output of an image stored with
-        # associated alpha is unassociated, rgb / alpha (measured in Cycles 5.0); an Alpha
-        # linked only to nodes the shader does not use, or through links Cycles' constant
-        # folding drops (Alpha x 0, a Mix Multiply by white), is not (Cycles removes those first);
-        # one whose Alpha is unused is when an identical node's is (Cycles merges the two: a leaf
-        # PNG's second node for its Alpha had left the first's colour associated, 0.86x)
+        # Cycles removes links its constant folding drops (Alpha x 0, a Mix Multiply by white)
+        # and merges identical nodes before it reads whether the Alpha output is used
         alpha_used = self._used_outputs.reads(node, node.outputs['Alpha'].identifier) \
             if self._used_outputs is not None else node.outputs['Alpha'].is_linked
-        unassociate = bool(alpha_used and associates_alpha(img))
-        key = img.as_pointer()
-        frame = user_frame(img, node.image_user, self.frame)   # an image sequence's frames differ
-        cached = self._images.get((key, unassociate, frame))
-        if cached is None:
-            # what loading it says is said again by every material that reads it (and by each
-            # rebuild of one: _build's probes and _product_map start with fresh reasons)
-            notes = []
-            pixels = image_pixels(img, notes, unassociate, node.image_user, self.frame, self.image_reading)
-            if pixels is not None and not all_finite(pixels):     # (an 8-bit image's bytes: finite)
-                # (a float image's NaN or infinity, kept: Cycles blends them in, and surfaces
-                # where the blend reaches them render black, as here)
-                ok = np.isfinite(pixels)
-                colour = ok[..., :3].any(axis=-1)       # (some colour channel finite: not black)
-                whole = int((~colour).sum())
-                partial = int((colour & ~ok.all(axis=-1)).sum())
-                if whole:
-                    notes.append(f"image '{img.name}': {whole} texel(s) NaN or infinite, read as 0 by every lookup "
-                                 "that blends them in (black there, as in Cycles)")
-                if partial:
-                    # (measured in Cycles 5.0: a point blending one in loses its light samples, 0 under
-                    # a sun, and keeps its BSDF-sampled light per channel, 0.75x under a uniform world)
-                    notes.append(f"image '{img.name}': {partial} texel(s) with some channels or the alpha NaN "
-                                 "or infinite: those channels read as 0 and the others kept here, while Cycles "
-                                 "drops the light samples of points that blend them in (darker there in Cycles)")
-            if pixels is not None and img.source == 'TILED':
-                pixels = udim_tiles(img, pixels, notes, unassociate, self.image_reading)
-            cached = self._images[key, unassociate, frame] = (pixels, notes)
-        pixels, notes = cached
-        reasons.extend(notes)
-        if pixels is None:
-            return None
-        udim = pixels if isinstance(pixels, UdimTiles) else None
-        if transform is not None and not np.isfinite(transform).all():
-            # a NaN or infinite Mapping (named in reasons): Cycles' lookup at NaN coordinates
-            # gives NaN in every channel, which its closures drop (a NaN colour is black, a NaN
-            # alpha opaque): the image is read as one black opaque texel
-            reasons.append(f"so image '{img.name}' reads black and opaque there (as in Cycles)")
-            pixels, udim = np.array([[[0.0, 0.0, 0.0, 1.0]]], np.float32), None
-            transform = np.array([[0.0, 0.0, 0.5], [0.0, 0.0, 0.5]])
-        where = None if transform is None else tuple(transform.ravel())
-        if self._image_probe is not None:        # probing how a chain combines it with an attribute
-            t = Texture((key, unassociate, interp, ext, where, frame), self._image_probe, interp, ext, transform,
-                         None, img.name)
-            t.aligned = True
+        t = image_texture(node, reasons, per_point, alpha_used, self.frame, self.image_reading, self._images)
+        if t is None or self._image_probe is None:
             return t
-        return Texture((key, unassociate, interp, ext, where, frame), pixels if udim is None else udim.flat,
-                        interp, ext, transform, udim, img.name)
+        # (probing how a chain combines it with an attribute)
+        t = Texture(t.key, self._image_probe, t.interpolation, t.extension, t.transform, None, t.name)
+        t.aligned = True
+        return t
 
     def _normal_input(self, node, reasons):
         """Note a BSDF's Bump nodes (export/bump.py) and tangent-space normal map

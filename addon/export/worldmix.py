@@ -11,10 +11,8 @@ import numpy as np
 from .. import nodeeval
 from .. import scenedata as sd
 from ..lights.environment import EnvironmentLight
-from ..mapping import texture_transform
-from .closure import Texture
-from .images import associates_alpha, image_pixels
-from .imagetextures import lookup_settings
+from ..nodegraph import unwrap, used_outputs
+from .imagetextures import image_texture
 
 
 def environment_radiance(env, d):
@@ -55,24 +53,21 @@ def blended_map(parts, directions_of, width, factor=None):
 
 def factor_images(frame, reading):
     """The image reader (procedurals.compile_socket's `image`: fn(node, reasons, per_point) ->
-    closure.Texture or None) of a world Mix Shader's factor: each Image Texture node's pixels at
-    `frame` through the export's images.ImageReading, its interpolation and extension as a
-    material reads them, so a factor of an image of the view direction (on Generated or Normal
-    coordinates) computes per direction; a UDIM image is not compiled (the factor then stands
-    at its own value, said)."""
+    closure.Texture or None) of a world Mix Shader's factor: each Image Texture node read as a
+    material reads it (imagetextures.image_texture: its pixels at `frame` through the export's
+    images.ImageReading, interpolation, extension, Mapping and what its texels say; its Alpha
+    used as Cycles' constant folding leaves it in the world's tree), so a factor of an image of
+    the view direction (on Generated or Normal coordinates) computes per direction; a UDIM image
+    is not compiled (the factor then stands at its own value, said)."""
+    images, used = {}, {}
+
     def image(node, reasons, per_point=None):
-        img = node.image
-        interp, ext = lookup_settings(node, reasons)
-        if img is None:
-            reasons.append("Image Texture without an image (magenta, as Cycles)")
-            return None
-        if img.source == 'TILED':
-            raise nodeeval.NotCompiled(f"UDIM image '{img.name}'")
-        # (Cycles unassociates the colour of an image stored associated where its Alpha is read)
-        unassociate = bool(node.outputs['Alpha'].is_linked and associates_alpha(img))
-        pixels = image_pixels(img, reasons, unassociate, node.image_user, frame, reading)
-        if pixels is None:
-            return None
-        transform = texture_transform(node, reasons) if per_point is None else None
-        return Texture((img.as_pointer(), unassociate, interp, ext), pixels, interp, ext, transform, None, img.name)
+        if node.image is not None and node.image.source == 'TILED':
+            raise nodeeval.NotCompiled(f"UDIM image '{node.image.name}'")
+        groups = getattr(node, 'groups', ())
+        tree = (groups[0] if groups else unwrap(node)).id_data      # (the world's own tree)
+        if tree.as_pointer() not in used:
+            used[tree.as_pointer()] = used_outputs(tree)
+        alpha_used = used[tree.as_pointer()].reads(node, node.outputs['Alpha'].identifier)
+        return image_texture(node, reasons, per_point, alpha_used, frame, reading, images)
     return image
