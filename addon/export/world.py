@@ -820,9 +820,11 @@ def _environment(node, strength, reasons, chain=None, frame=None, reading=WHOLE,
 
 def _overflow_read_as_0(texels, strength, name, reasons):
     """texels, or a copy with NaN in the channels that the Background's strength takes past
-    float32's range (an HDR's 1e30 sun at Strength 1e9): Cycles' radiance is infinite there and
-    its film drops those samples, as it does an infinite texel's, which the map reads as 0 in the
-    lookups blending it in (a NaN texel). The native map refuses such a product: the render had
+    float32's range (an HDR's 1e30 sun at Strength 1e9), which the map reads as 0 in every lookup
+    blending them in (a NaN texel). Cycles blends first and multiplies by the strength after: its
+    radiance is infinite (samples its film drops) only where the blend weighs such a texel enough,
+    near its centre; lookups weighing it less (below ~0.34 for 1e30 x 1e9) stay finite, near
+    float32's largest value, and are kept. The native map refuses such a product: the render had
     failed ("environment map: pixel value inf ... is negative or not finite")."""
     if not strength > 1.0 or isinstance(texels, ByteTexels):
         return texels           # (a float32 texel times at most 1 stays finite; bytes are at most 1)
@@ -837,6 +839,6 @@ def _overflow_read_as_0(texels, strength, name, reasons):
     if not over.any():
         return texels
     reasons.append(f"image '{name}': {int(over.any(axis=-1).sum())} pixel(s) at Strength {strength:g} beyond "
-                   "float32's range: the lookups that blend them in read 0 in those channels (black there, as "
-                   "Cycles' film drops their infinite samples)")
+                   "float32's range: the lookups that blend them in read 0 in those channels (black there; "
+                   "Cycles' radiance there is infinite, samples its film drops, or near float32's largest)")
     return np.where(over, np.float32(np.nan), rgb).astype(np.float32)
