@@ -299,7 +299,7 @@ def render(args):
         try:
             bpy.ops.render.render(write_still=False, scene=scene.name)
         except RuntimeError as e:     # the engine reported an ERROR: the render failed
-            if interrupted:           # (Ctrl-C before the frame had an image: nothing to write)
+            if interrupted and _only_cancelled(e):    # (Ctrl-C before the frame had an image)
                 print("DACRT: interrupted before the frame had an image; nothing written")
                 raise SystemExit(130)
             raise SystemExit(f"error: render failed: {e}")
@@ -313,6 +313,13 @@ def render(args):
               f"{' and '.join(written)}")
         raise SystemExit(130)
     print(f"DACRT: wrote {' and '.join(written)}")
+
+
+def _only_cancelled(error):
+    """Whether every error a failed render reported is the engine's cancel before the frame had
+    an image (another, such as running out of memory after the Ctrl-C, keeps its own message)."""
+    lines = [line for line in str(error).splitlines() if line.strip()]
+    return bool(lines) and all(engine.NOTHING_TO_WRITE in line for line in lines)
 
 
 def _check_writable(path):

@@ -97,6 +97,9 @@ def unregister_handlers():
 # line's Ctrl-C (headless, test_break never turns true). Set by request_cancel(), cleared by
 # clear_cancel() before the next render.
 _CANCEL_ASKED = [False]
+# the end of the error a still cancelled so before it had an image reports (the command line
+# tells it from any other error by it)
+NOTHING_TO_WRITE = "had an image: nothing to write"
 
 
 def request_cancel():
@@ -228,7 +231,7 @@ class DACRTRenderEngine(bpy.types.RenderEngine):
             self.report({'ERROR'}, f"DACRT: render cancelled at frame {frame} of the animation, before it had "
                                    "an image: the animation stops here")
         elif len(self._layers_done) <= 1:   # (no other layer of this frame rendered: nothing to keep)
-            self.report({'ERROR'}, f"DACRT: render cancelled before frame {frame} had an image: nothing to write")
+            self.report({'ERROR'}, f"DACRT: render cancelled before frame {frame} {NOTHING_TO_WRITE}")
 
     # --- the viewport (3D viewport in Rendered shading) ---------------------------------
     def view_update(self, context, depsgraph):

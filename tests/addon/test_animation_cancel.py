@@ -76,6 +76,12 @@ _CLI_SCRIPT = textwrap.dedent('''
     def ctrl_c(*args):          # (the command line's SIGINT handler, called as a Ctrl-C calls it)
         signal.getsignal(signal.SIGINT)(signal.SIGINT, None)
     bpy.app.handlers.render_pre.append(ctrl_c)
+    if len(sys.argv) > 2:       # another error after the Ctrl-C
+        from addon import export
+
+        def fails(*args, **kw):
+            raise {'memory': MemoryError, 'other': ValueError}[sys.argv[2]]('the export broke')
+        export.export_scene = fails
     cli.main(['render', '--samples', '2', '--out', sys.argv[1]])
 ''')
 
@@ -92,3 +98,19 @@ def test_ctrl_c_before_the_command_lines_frame_had_an_image(tmp_path):
     assert run.returncode == 130, (run.returncode, run.stdout[-2000:], run.stderr[-2000:])
     assert "interrupted before the frame had an image; nothing written" in run.stdout, run.stdout[-2000:]
     assert not (tmp_path / 'out' / 'x.png').exists() and not (tmp_path / 'out' / 'x.exr').exists()
+
+
+@pytest.mark.parametrize('error', ['other', 'memory'])
+def test_another_error_after_the_command_lines_ctrl_c_keeps_its_message(tmp_path, error):
+    """A render that failed otherwise after the Ctrl-C (alone, or beside the cancel's error: out of
+    memory before the frame had an image) says its error, exit 1: it had been taken for the
+    cancel ('nothing written', exit 130), the real message hidden."""
+    script = tmp_path / 'cli_cancel.py'
+    script.write_text(_CLI_SCRIPT)
+    root = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(filter(None, [root, os.environ.get('PYTHONPATH')])))
+    run = subprocess.run([sys.executable, str(script), str(tmp_path / 'out' / 'x.png'), error],
+                         capture_output=True, text=True, timeout=600, cwd=root, env=env)
+    assert run.returncode == 1, (run.returncode, run.stdout[-2000:], run.stderr[-2000:])
+    assert "nothing written" not in run.stdout, run.stdout[-2000:]
+    assert "error: render failed:" in run.stderr and "the export broke" in run.stderr, run.stderr[-2000:]
