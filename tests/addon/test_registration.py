@@ -154,11 +154,15 @@ def test_unregister_then_register_again(tmp_path):
         import sys
         sys.path.insert(0, {str(conftest.ROOT)!r})
         import bpy, addon
+        from addon.export import worldkeep
         for _ in range(2):
             addon.register()
             assert hasattr(bpy.types.Scene, 'dacrt') and hasattr(bpy.types, 'RENDER_PT_dacrt')
+            assert bpy.app.handlers.load_post.count(worldkeep.released_on_load) == 1
             addon.unregister()
             assert not hasattr(bpy.types.Scene, 'dacrt')
+            assert worldkeep.released_on_load not in bpy.app.handlers.load_post
+            assert worldkeep.released_on_load not in bpy.app.handlers.load_factory_startup_post
             assert 'DACRT' not in bpy.types.RENDER_PT_format.COMPAT_ENGINES
         print("OK")
     """, tmp_path)
