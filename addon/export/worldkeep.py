@@ -6,9 +6,10 @@ update, where nothing of it changed.
 What a map was made from is kept without the parts' texels themselves: a read-only array (a
 file's texels export.readkeep gives again) by a weak reference, the same array meaning the same
 bits; any other array, and the factor's values at every texel, by a digest of their bits, since a
-writable array can be rewritten in place or its memory reused. At most _KEEP_BYTES of maps (two
-4096 x 2048 maps with their factor values) are kept, the least recently used dropped first; a
-bigger map is not kept. All is dropped when a file is loaded or a new one started (the add-on's
+writable array can be rewritten in place or its memory reused. At most _KEEP_BYTES of maps (three
+4096 x 2048 ones: a Light Path mix's three worlds at a 4K HDRI's width, which an export asks for in
+turn, so a budget of two would drop each before its reuse) are kept, the least recently used dropped
+first; a bigger map is not kept. All is dropped when a file is loaded or a new one started (the add-on's
 load_post handler, released_on_load), with the environment light's kept native maps."""
 
 import hashlib
@@ -28,7 +29,7 @@ from . import worldmix
 # the camera's and the bounces' worlds): [{'made': _made(...), 'env': Environment, 'bytes': n}],
 # the most recently used last
 _kept: list = []
-_KEEP_BYTES = 2 * 4096 * 2048 * 4 * 4
+_KEEP_BYTES = 3 * 4096 * 2048 * 3 * 4
 _serial = itertools.count()
 _lock = threading.Lock()
 
@@ -53,7 +54,7 @@ def kept_map(parts, directions_of, width, factor=None):
         band = max(1, (1 << 18) // width) * width
         values = np.concatenate([np.asarray(factor(np.ascontiguousarray(flat[i:i + band], np.float32)),
                                             np.float32).reshape(-1, 1) for i in range(0, len(flat), band)])
-    size = dirs.shape[0] * dirs.shape[1] * 3 * 4 + (0 if values is None else values.nbytes)
+    size = dirs.shape[0] * dirs.shape[1] * 3 * 4         # (the map's float32 RGB: all an entry holds)
     made = None if size > _KEEP_BYTES else _made(parts, values)
     with _lock:
         for i, entry in enumerate(_kept):
