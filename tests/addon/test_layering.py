@@ -145,6 +145,7 @@ CACHES = {
     ("lights.envkeep", "_stats"),               # the texel check of the latest read-only texels (a weakref to them)
     ("lights.madelamp", "_NAMES"),              # a Light dataclass's field names (fixed per class)
     ("export.readkeep", "_kept"),               # a file's float texels, keyed by its stat identity and every setting read
+    ("export.worldkeep", "_kept"),              # blended world maps, reused only for parts of the same bits and factor values
 }
 # what outlives one render by design: the C heap's and OpenBLAS's thread policies are the
 # process's (allocator, blasthreads: counted nestings under a lock), and the engine,
