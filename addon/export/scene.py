@@ -13,6 +13,7 @@ import numpy as np
 from .. import hair, pointcloud
 from .. import scenedata as sd
 from ..lights import envkeep
+from ..lights.linking import cycles_mesh_light_excess_said
 from ..passes import CHANNELS as PASS_CHANNELS
 from . import budget
 from .assembly import Assembly
@@ -340,11 +341,18 @@ class Exporter:
             self.messages.append(('WARNING', f"world approximated: {said}"))
         self._summarize(geometry, world, environment, camera_world)
         used = set(self._used.tolist())
-        said = clamp_direct_said(settings, [m.name for i, m in enumerate(self.materials.materials)
-                                            if i in used and np.any(m.emission > 0) and m.emission_sampling != 'NONE'],
+        # the light-sampled emissive materials (Emission Sampling not None)
+        sampled = [i for i, m in enumerate(self.materials.materials)
+                   if i in used and np.any(m.emission > 0) and m.emission_sampling != 'NONE']
+        said = clamp_direct_said(settings, [self.materials.materials[i].name for i in sampled],
                                  sum(1 for lt in self.lights if np.any(lt.strength > 0)),
                                  None if environment is None or self.world is None else self.world.name,
                                  sum(1 for lt in self.lights if np.any(lt.strength > 0) and lt.kind == 'SUN'))
+        if said:
+            self.messages.append(('WARNING', said))
+        said = cycles_mesh_light_excess_said(self.light_links, self.shadow_links, [
+            self.object_keys[i] for i in np.unique(np.asarray(geometry.object_index)[
+                np.isin(geometry.material, sampled)]) if i < len(self.object_keys)])
         if said:
             self.messages.append(('WARNING', said))
         said = None if self.world is None else max_bounces_said(self.world, environment, settings.max_bounces)
