@@ -350,7 +350,7 @@ class Exporter:
                                  sum(1 for lt in self.lights if np.any(lt.strength > 0) and lt.kind == 'SUN'))
         if said:
             self.messages.append(('WARNING', said))
-        said = cycles_mesh_light_excess_said(self.light_links, self.shadow_links, [
+        said = cycles_mesh_light_excess_said(self.light_links, [
             self.object_keys[i] for i in np.unique(np.asarray(geometry.object_index)[
                 np.isin(geometry.material, sampled)]) if i < len(self.object_keys)])
         if said:
