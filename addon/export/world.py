@@ -547,10 +547,10 @@ def _camera_coordinates(model, d, needs):
     return out
 
 
-def _equirect_directions(width=PROCEDURAL_WIDTH):
+def _equirect_directions(width=PROCEDURAL_WIDTH, height=None):
     """(height, width, 3) unit directions at the texel centres of an equirectangular map as
-    skyanalytic.equirect lays them out (row 0 at the -Z pole), height = width / 2."""
-    height = width // 2
+    skyanalytic.equirect lays them out (row 0 at the -Z pole), height width / 2 unless given."""
+    height = width // 2 if height is None else int(height)
     theta = (1.0 - (np.arange(height) + 0.5) / height) * np.pi
     phi = (0.5 - (np.arange(width) + 0.5) / width) * 2 * np.pi
     st = np.sin(theta)[:, None]

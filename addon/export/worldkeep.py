@@ -45,9 +45,8 @@ def kept_map(parts, directions_of, width, factor=None):
     be missed. The map is made read-only and given a texels_key of its own, so the environment
     light's native map of it is kept too (lights/envkeep.py). A part whose texels are computed on
     read (texture.LazyTexels) is not compared: built each time."""
-    maps = [env for _, env in parts if env is not None]
-    width = max([int(width)] + [int(np.shape(env.pixels)[1]) for env in maps])
-    dirs = directions_of(width)
+    width, height = worldmix.grid(parts, width)
+    dirs = directions_of(width, height)
     values = None
     if factor is not None:
         flat = dirs.reshape(-1, 3)
@@ -68,7 +67,7 @@ def kept_map(parts, directions_of, width, factor=None):
         f = values[offset[0]:offset[0] + len(d)]
         offset[0] += len(d)
         return f
-    env = worldmix.blended_map(parts, lambda w: dirs, width, None if values is None else kept_factor)
+    env = worldmix.blended_map(parts, lambda w, h: dirs, width, None if values is None else kept_factor)
     if made is None:
         return env
     env.pixels.setflags(write=False)

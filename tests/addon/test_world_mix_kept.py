@@ -113,9 +113,9 @@ def _part(px, key=None):
     return sd.Environment(px, np.ones(3, np.float32), np.eye(3), 'Linear', texels_key=key)
 
 
-def _directions(width):
+def _directions(width, height):
     from addon.export.world import _equirect_directions
-    return _equirect_directions(width)
+    return _equirect_directions(width, height)
 
 
 def test_texels_written_in_place_are_blended_again():

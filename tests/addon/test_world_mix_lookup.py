@@ -47,8 +47,7 @@ def test_an_even_blend_of_a_map_with_itself_is_the_map():
     env = _env("srgb_bytes")
     grid = {}
 
-    def directions_of(width):
-        h = width // 2
+    def directions_of(width, h):
         v = (np.arange(h) + 0.5) / h
         u = (np.arange(width) + 0.5) / width
         theta, phi = np.pi * (1.0 - v)[:, None], 2 * np.pi * (0.5 - u)[None, :]

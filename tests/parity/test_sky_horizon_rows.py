@@ -88,3 +88,27 @@ def test_multiple_scattering_horizon_inside_a_row(tmp_path):
     assert c[row, 0] < 0.6 * c[row + 1, 0], c[:, 0]     # (it holds the step: dimmer than the sky)
     assert np.abs(ratio[row] - 1).max() < 0.01, (row, ratio.round(4).tolist())
     assert np.abs(ratio - 1).max() < 0.02, ratio.round(4).tolist()   # (the dark ground's noise)
+
+
+def test_hosek_wilkie_rows_in_a_world_mix(tmp_path):
+    """A world Mix Shader of a varying factor (a Gradient on Normal) between a constant and the
+    Hosek-Wilkie sky: the two are blended into one map (export/worldmix.py), which had been 2:1 at
+    the sky map's width (1024 x 512), its rows of 0.35 degrees blended across the horizon's turn:
+    the rows just above it 3-5% bright in blue (fuzz seed 432: 1.02-1.03x over a whole panorama,
+    unsaid). The blend now keeps the sky's 2048 rows."""
+    import bpy
+    _level_view('HOSEK_WILKIE', (0.8, -0.3, 0.25))
+    nt = bpy.context.scene.world.node_tree
+    bg = nt.nodes['Background']
+    mix, flat = nt.nodes.new('ShaderNodeMixShader'), nt.nodes.new('ShaderNodeBackground')
+    flat.inputs['Color'].default_value = (0.05, 0.1, 0.2, 1.0)
+    grad, coordinates = nt.nodes.new('ShaderNodeTexGradient'), nt.nodes.new('ShaderNodeTexCoord')
+    scale = nt.nodes.new('ShaderNodeMath')
+    scale.operation, scale.inputs[1].default_value, scale.inputs[2].default_value = 'MULTIPLY_ADD', 0.2, 0.8
+    nt.links.new(coordinates.outputs['Normal'], grad.inputs['Vector'])
+    nt.links.new(grad.outputs['Fac'], scale.inputs[0])
+    nt.links.new(scale.outputs[0], mix.inputs['Fac'])
+    nt.links.new(flat.outputs[0], mix.inputs[1])
+    nt.links.new(bg.outputs[0], mix.inputs[2])
+    nt.links.new(mix.outputs[0], nt.nodes['World Output'].inputs['Surface'])
+    _rows_within(0.005, tmp_path)
