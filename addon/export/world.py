@@ -25,7 +25,7 @@ from .emission import huge_said
 from .images import MISSING_IMAGE, WHOLE, encoded_environment, image_pixels
 from .materials import channel_line
 from .shadersockets import mix_factor, value_emission
-from .sky import sky_environment
+from .sky import sky_environment, sun_beside_legacy_said
 from . import worldkeep, worldmix
 
 
@@ -88,6 +88,10 @@ def export_world(scene, view_layer=None, camera=None, by_ray=None, reading=WHOLE
     with nodeeval.light_path(values):
         uniform, env = _world_surface(out.inputs['Surface'], 1.0, color, reasons, 0, rays,
                                       by_ray, scene.frame_current, reading, view)
+    reasons.append(sun_beside_legacy_said({link.from_node.as_pointer(): link.from_node for link in
+                                           nodegraph.links_feeding(out.inputs['Surface'])
+                                           if link.from_node.type == 'TEX_SKY'}.values()))
+    reasons = [r for r in reasons if r]
     if rays is not None and 'Is Camera Ray' not in rays and 'Is Camera Ray' in by_ray:
         # (camera rays see the other export's world)
         reasons = [r for r in reasons if r != ORTHO_WINDOW_SAID]
