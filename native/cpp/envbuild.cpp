@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <limits>
 #include <mutex>
@@ -130,6 +131,27 @@ namespace {
 inline float texel_value(float x) { return x; }
 inline float texel_value(uint8_t k) { return float(k) * float(1.0 / 255.0); }
 
+// What is wrong with texel k, the first one refused: a channel's finite value negative, or one
+// the scale (null: none) takes past float's range (NaN and infinite values are kept, as NaN).
+template <class T>
+std::string texel_refusal(const T* texels, size_t channels, size_t k, const float* scale) {
+    constexpr float inf = std::numeric_limits<float>::infinity();
+    int a = 0;
+    float x = 0.0f;
+    for (; a < 3; ++a) {
+        x = texel_value(texels[k * channels + a]);
+        const float y = scale ? x * scale[a] : x;
+        if (std::fabs(x) < inf && !(y >= 0 && y < inf)) break;
+    }
+    char text[160];
+    if (x < 0)
+        std::snprintf(text, sizeof text, "pixel value %.9g at %zu (channel %d) is negative", double(x), k, a);
+    else
+        std::snprintf(text, sizeof text, "pixel value %.9g at %zu (channel %d) times scale %.9g is beyond float's range",
+                      double(x), k, a, double(scale[a]));
+    return text;
+}
+
 template <class T>
 std::string build_tables(EnvironmentMap& env, const T* texels, size_t channels, uint32_t width, uint32_t height,
                          const float to_map[9], bool closest, bool srgb, const float* scale) {
@@ -182,20 +204,20 @@ std::string build_tables(EnvironmentMap& env, const T* texels, size_t channels, 
                 if (srgb) t[a] = byte_decode(t[a]) * env.scale[a];
                 t[a] = t[a] == t[a] ? t[a] : 0.0f;
             }
-            env.texel[4 * k + 3] = (t[0] + t[1] + t[2]) * (1.0f / 3.0f);
+            // (a float sum past float's range, e.g. three texels of 3e38, is taken in double,
+            // and a luminance still infinite, an sRGB decode past float's, as float's largest:
+            // an infinite one made every CDF NaN and every sample's direction NaN)
+            const float sum = t[0] + t[1] + t[2];
+            env.texel[4 * k + 3] = sum < inf ? sum * (1.0f / 3.0f)
+                                             : float(std::min((double(t[0]) + t[1] + t[2]) / 3.0,
+                                                              double(std::numeric_limits<float>::max())));
         }
         if (bad < cells) {
             std::lock_guard<std::mutex> hold(first_lock);
             first_bad = std::min(first_bad, bad);
         }
     }, min_rows(width));
-    if (first_bad < cells) {
-        const float* t = env.texel.data() + 4 * first_bad;
-        const int a = !(t[0] >= 0 && t[0] < std::numeric_limits<float>::infinity()) && t[0] == t[0]   ? 0
-                      : !(t[1] >= 0 && t[1] < std::numeric_limits<float>::infinity()) && t[1] == t[1] ? 1 : 2;
-        return "pixel value " + std::to_string(t[a]) + " at " + std::to_string(first_bad) +
-               " is negative or not finite";
-    }
+    if (first_bad < cells) return texel_refusal(texels, channels, first_bad, folds ? scale : nullptr);
     // Cell weights: their luminance integral, the mean of the corners ('Linear': the cell
     // between texel centres, whose bilinear blend is sampled exactly within it) or the texel
     // ('Closest'), times the mean of sin(theta) over the cell's rows (the last 'Linear' row

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <memory>
 #include <numeric>
 #include <stdexcept>
@@ -463,7 +464,9 @@ std::string light_tree_error(const LightTreeInput& in) {
         }
         if (!(in.cos_o[i] >= -1.0f && in.cos_o[i] <= 1.0f) || !(in.cos_e[i] >= -1.0f && in.cos_e[i] <= 1.0f))
             return at() + "cos_o and cos_e must lie in [-1, 1]";
-        if (!(in.energy[i] > 0.0 && in.energy[i] <= 1e200)) return at() + "energy must be > 0 and at most 1e200";
+        // (a denormal energy's importances lose their bits: its pick probability came out inf)
+        if (!(in.energy[i] >= std::numeric_limits<double>::min() && in.energy[i] <= 1e200))
+            return at() + "energy must lie in [2.2250738585072014e-308 (the smallest normal double), 1e200]";
         if (in.group && in.group[i] < 0) return at() + "group must be >= 0";
         if (in.set && in.set[i] > 63) return at() + "set must lie in 0..63";
         if (in.radius && !(in.radius[i] >= 0.0f)) return at() + "radius must be >= 0 (inf: the box's)";

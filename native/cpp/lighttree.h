@@ -60,7 +60,7 @@ struct LightTreeNode {
 
 // The lights of a tree, m members, each with an axis-aligned box (lo, hi: 3 rows of m), an
 // emission cone (axis: 3 rows of m, unit or anything for cos_o = -1; cos_o, cos_e: m), an
-// energy (m, > 0, at most 1e200: importances stay finite) and the key it answers to (m distinct values >= 0, e.g. the light
+// energy (m, a normal double at most 1e200: importances and probabilities stay finite) and the key it answers to (m distinct values >= 0, e.g. the light
 // choice's entry index).
 struct LightTreeInput {
     const float* lo;

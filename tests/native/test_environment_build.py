@@ -107,13 +107,17 @@ def test_an_srgb_maps_importance_is_its_decoded_texels_mean():
         np.testing.assert_allclose(ratio / ratio[:, :1], 1.0, rtol=2e-6)
 
 
-def test_a_texel_beyond_float_after_the_scale_is_refused():
+def test_a_texel_beyond_float_after_the_scale_or_negative_is_refused_saying_which():
+    """(the message had said "negative or not finite" of a texel whose value is kept when not finite)"""
     px = np.ones((4, 8, 4), F32)
     px[2, 5, 1] = 1e30
-    with pytest.raises(ValueError, match=r"pixel value inf at 21 is negative or not finite"):
+    with pytest.raises(ValueError, match=r"pixel value 1.00000002e\+30 at 21 \(channel 1\) times scale 1e\+10 is beyond float.s range"):
         lamps.environment_map(px, scale=np.array([1.0, 1e10, 1.0], F32))
     with pytest.raises(ValueError, match=r"scale nan is negative or not finite"):
         lamps.environment_map(px, scale=np.array([1.0, np.nan, 1.0], F32))
+    px[2, 5, 1] = -0.5
+    with pytest.raises(ValueError, match=r"pixel value -0.5 at 21 \(channel 1\) is negative$"):
+        lamps.environment_map(px)
 
 
 def test_texel_stats_count_the_rgb_faults_and_light():

@@ -228,6 +228,24 @@ def test_energies_at_the_floor_far_away_keep_finite_probabilities(case):
         np.testing.assert_allclose(prob, pdf[got], rtol=1e-12)
 
 
+@pytest.mark.parametrize("far", [2.0, 1e6, 1e15])
+def test_the_smallest_energy_accepted_keeps_finite_probabilities(far):
+    """The smallest normal double is the least energy a light may have: alone or beside lights of
+    energy 1, near or far, every pick's probability is finite in (0, 1] and the pdf's. (A denormal
+    one, 5e-324 or 1e-310, had been accepted and every pick made with probability inf.)"""
+    tiny = np.finfo(np.float64).tiny
+    rng = np.random.default_rng(1)
+    c = rng.uniform(-1.0, 1.0, (3, 8))
+    P = (rng.normal(size=(3, 500)) * far).astype(F32)
+    u = rng.random(500)
+    for E in ([tiny] * 8, [tiny, 1.0] * 4):
+        tree = tree_of(c, 0.0, E)
+        for rows in (False, True):
+            got, prob = tree.sample(P, u, rows=rows)
+            assert np.all(np.isfinite(prob) & (prob > 0.0) & (prob <= 1.0)), (E[:2], rows, prob[:4])
+            np.testing.assert_allclose(tree.pdf(P, got), prob, rtol=1e-12)
+
+
 def test_a_light_facing_away_is_never_picked_and_delta_lights_always_can_be():
     """A one-sided light whose back faces the point gets probability 0 (a light sample there
     would be wasted); a point light, however faint and far, keeps a probability > 0 beside a
@@ -266,8 +284,10 @@ def test_one_light_and_coincident_lights():
 
 @pytest.mark.parametrize('bad, message', [
     (dict(lo_nan=True), 'light 1: bounds must be finite'),
-    (dict(energy=[1.0, 0.0]), 'light 1: energy must be > 0 and at most 1e200'),
-    (dict(energy=[1.0, np.inf]), 'light 1: energy must be > 0'),
+    (dict(energy=[1.0, 0.0]), r'light 1: energy must lie in \[2.2250738585072014e-308 \(the smallest normal double\), 1e200\]'),
+    (dict(energy=[1.0, np.inf]), 'light 1: energy must lie in'),
+    (dict(energy=[5e-324, 1.0]), 'light 0: energy must lie in'),       # denormal: its probability was inf
+    (dict(energy=[1.0, 2.2e-308]), 'light 1: energy must lie in'),
     (dict(keys=[3, 3]), 'light 1: key 3 is not unique'),
     (dict(keys=[0, -2]), 'light 1: key must lie in'),
     (dict(cos_o=[1.0, 2.0]), 'light 1: cos_o and cos_e must lie in'),
