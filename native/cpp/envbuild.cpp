@@ -179,10 +179,12 @@ std::string build_tables(EnvironmentMap& env, const T* texels, size_t channels, 
     // one's luminance (an sRGB map's: of the decoded texel x scale, as the lookup decodes).
     std::mutex first_lock;
     size_t first_bad = cells;
+    std::atomic<bool> steep{false};
     const ByteDecode byte_decode;
     const bool folds = !srgb && scale;
     parallel_for(height, [&](size_t b, size_t e) {
         size_t bad = cells;
+        float top = 0.0f;
         for (size_t k = b * width; k < e * width; ++k) {
             // an image's NaN or infinite channel is kept as NaN: every lookup blending it in
             // reads 0 in that channel (environment.cpp), as Cycles' blend is NaN there and its
@@ -211,13 +213,16 @@ std::string build_tables(EnvironmentMap& env, const T* texels, size_t channels, 
             env.texel[4 * k + 3] = sum < inf ? sum * (1.0f / 3.0f)
                                              : float(std::min((double(t[0]) + t[1] + t[2]) / 3.0,
                                                               double(std::numeric_limits<float>::max())));
+            top = std::max(top, env.texel[4 * k + 3]);
         }
+        if (top > 0x1p60f) steep = true;
         if (bad < cells) {
             std::lock_guard<std::mutex> hold(first_lock);
             first_bad = std::min(first_bad, bad);
         }
     }, min_rows(width));
     if (first_bad < cells) return texel_refusal(texels, channels, first_bad, folds ? scale : nullptr);
+    env.steep = steep.load();
     // Cell weights: their luminance integral, the mean of the corners ('Linear': the cell
     // between texel centres, whose bilinear blend is sampled exactly within it) or the texel
     // ('Closest'), times the mean of sin(theta) over the cell's rows (the last 'Linear' row

@@ -53,11 +53,6 @@ DACRT_ENV_INLINE float sample_linear(float u, float a, float b) {
 // sampled exactly: y from its marginal, then x given y (both linear), for uniforms fu, fv.
 DACRT_ENV_INLINE void linear_place(float fu, float fv, float a, float b, float c, float d, float fj, float fi,
                                    float fw, float fh, float& u, float& v) {
-    // sample_linear squares sums of corners, inf past ~9e18 (every direction NaN): a cell with a
-    // corner above 2^60 is sampled with its corners x 2^-80, a power of two, which every
-    // operation here carries exactly (below it, x 1: the same bits)
-    const float down = (a > 0x1p60f) | (b > 0x1p60f) | (c > 0x1p60f) | (d > 0x1p60f) ? 0x1p-80f : 1.0f;
-    a *= down, b *= down, c *= down, d *= down;
     const float y = sample_linear(fv, a + b, c + d);
     const float x = sample_linear(fu, a + (c - a) * y, b + (d - b) * y);
     u = (fj + 0.5f + x) / fw;

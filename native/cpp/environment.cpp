@@ -151,6 +151,10 @@ inline void corners(const EnvironmentMap& env, const Picked& p, float& a, float&
     const size_t i1 = i + 1 == env.height ? 0 : i + 1, j1 = j + 1 == w ? 0 : j + 1;
     const float* L = env.texel.data() + 3;  // luminance, stride 4
     a = L[(i * w + j) * 4], b = L[(i * w + j1) * 4], c = L[(i1 * w + j) * 4], d = L[(i1 * w + j1) * 4];
+    // envcell::sample_linear squares sums of corners, inf past ~9e18 (every direction was NaN):
+    // a cell with a corner above 2^60 is placed with its corners x 2^-80, a power of two, which
+    // the placement's operations carry exactly (only maps that have such a corner test it)
+    if (env.steep && std::max(std::max(a, b), std::max(c, d)) > 0x1p60f) a *= 0x1p-80f, b *= 0x1p-80f, c *= 0x1p-80f, d *= 0x1p-80f;
 }
 
 // 'Closest': fu, fv < 1, but the division can round u up onto the next texel's edge, whose

@@ -57,6 +57,7 @@ struct EnvironmentMap {
                                         // the factor of the corners' bilinear luminance ('Linear')
     float to_map[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};   // row-major, orthogonal
     double total = 0;                   // sum of the weights: 0 = nothing to sample
+    bool steep = false;                 // a luminance above 2^60 (corners(), environment.cpp)
 };
 
 // Radiance toward world direction d (unit) and the solid-angle pdf of sampling it.
