@@ -1,7 +1,8 @@
 """An environment map whose texels are near float's largest (native/cpp/envbuild.cpp): a texel's
 luminance, the mean of its RGB, had been summed in float, so three channels of 3e38 made it inf,
-every CDF NaN, and every sample's direction NaN (value 0, pdf 0). The map now samples as the
-same map scaled into range does."""
+every CDF NaN, and every sample's direction NaN (value 0, pdf 0); and a 'Linear' cell's
+placement squared its corners' sums, NaN past ~9e18. The map now samples as the same map
+scaled into range does."""
 
 import numpy as np
 import pytest
@@ -28,8 +29,9 @@ def _draws(env):
 
 
 @pytest.mark.parametrize("interp", ["Linear", "Closest"])
-def test_a_patch_of_3e38_samples_as_the_map_scaled_into_range(interp):
-    px = _patched(3e38)
+@pytest.mark.parametrize("bright", [1e20, 3e38])   # 1e20: only the Linear cell's squares overflowed
+def test_a_bright_patch_samples_as_the_map_scaled_into_range(interp, bright):
+    px = _patched(bright)
     env = lamps.environment_map(px, None, interp)
     ref = lamps.environment_map(px * DOWN, None, interp)
     assert np.isfinite(env.total) and env.total == pytest.approx(ref.total / float(DOWN), rel=1e-6)
