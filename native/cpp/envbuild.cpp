@@ -184,7 +184,7 @@ std::string build_tables(EnvironmentMap& env, const T* texels, size_t channels, 
     const bool folds = !srgb && scale;
     parallel_for(height, [&](size_t b, size_t e) {
         size_t bad = cells;
-        float top = 0.0f;
+        bool steep_rows = false;
         for (size_t k = b * width; k < e * width; ++k) {
             // an image's NaN or infinite channel is kept as NaN: every lookup blending it in
             // reads 0 in that channel (environment.cpp), as Cycles' blend is NaN there and its
@@ -209,13 +209,14 @@ std::string build_tables(EnvironmentMap& env, const T* texels, size_t channels, 
             // (a float sum past float's range, e.g. three texels of 3e38, is taken in double,
             // and a luminance still infinite, an sRGB decode past float's, as float's largest:
             // an infinite one made every CDF NaN and every sample's direction NaN)
-            const float sum = t[0] + t[1] + t[2];
-            env.texel[4 * k + 3] = sum < inf ? sum * (1.0f / 3.0f)
-                                             : float(std::min((double(t[0]) + t[1] + t[2]) / 3.0,
-                                                              double(std::numeric_limits<float>::max())));
-            top = std::max(top, env.texel[4 * k + 3]);
+            float lum = (t[0] + t[1] + t[2]) * (1.0f / 3.0f);
+            if (!(lum < inf)) [[unlikely]]
+                lum = float(std::min((double(t[0]) + t[1] + t[2]) / 3.0, double(std::numeric_limits<float>::max())));
+            if (lum > 0x1p60f) [[unlikely]]
+                steep_rows = true;
+            env.texel[4 * k + 3] = lum;
         }
-        if (top > 0x1p60f) steep = true;
+        if (steep_rows) steep = true;
         if (bad < cells) {
             std::lock_guard<std::mutex> hold(first_lock);
             first_bad = std::min(first_bad, bad);
