@@ -210,9 +210,9 @@ std::string build_tables(EnvironmentMap& env, const T* texels, size_t channels, 
             // and a luminance still infinite, an sRGB decode past float's, as float's largest:
             // an infinite one made every CDF NaN and every sample's direction NaN)
             float lum = (t[0] + t[1] + t[2]) * (1.0f / 3.0f);
-            if (!(lum < inf)) [[unlikely]]
+            if (!(lum < inf))
                 lum = float(std::min((double(t[0]) + t[1] + t[2]) / 3.0, double(std::numeric_limits<float>::max())));
-            if (lum > 0x1p60f) [[unlikely]]
+            if (lum > 0x1p60f)
                 steep_rows = true;
             env.texel[4 * k + 3] = lum;
         }
